@@ -1,0 +1,70 @@
+"""Errors a user can cause, and how they are worded.
+
+Every bad input is reported as an :class:`InputError` naming the field, the
+value and the allowed range, so the CLI can print one line (no traceback) and
+the node can put the same text on ``/diagnostics``.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+__all__ = ["InputError", "check_range", "check_finite"]
+
+
+class InputError(ValueError):
+    """A user-supplied value is invalid.
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the offending field (``"gears.lobe_radius_m"``).
+    value : Any
+        The value received.
+    allowed : str
+        Human-readable allowed range or set (``"(0, 0.05] m"``).
+    reason : str, optional
+        Extra explanation (e.g. why a profile is undercut).
+    """
+
+    def __init__(self, field: str, value: Any, allowed: str, reason: str = ""):
+        self.field = field
+        self.value = value
+        self.allowed = allowed
+        self.reason = reason
+        msg = f"{field} = {value!r} is invalid; allowed: {allowed}"
+        if reason:
+            msg += f" ({reason})"
+        super().__init__(msg)
+
+
+def check_finite(field: str, value: float) -> float:
+    """Return ``float(value)`` or raise :class:`InputError` if it is NaN/inf/not a number."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(field, value, "a finite number") from None
+    if not math.isfinite(v):
+        raise InputError(field, value, "a finite number")
+    return v
+
+
+def check_range(field: str, value: float, lo: float | None = None, hi: float | None = None,
+                *, lo_open: bool = False, hi_open: bool = False, unit: str = "") -> float:
+    """Check ``lo <= value <= hi`` (open ends if asked); return the value as float.
+
+    Raises
+    ------
+    InputError
+        Naming ``field``, the value and the interval, e.g. ``(0, inf) m``.
+    """
+    v = check_finite(field, value)
+    bad = (lo is not None and (v < lo or (lo_open and v == lo))) or \
+          (hi is not None and (v > hi or (hi_open and v == hi)))
+    if bad:
+        left = "(" if (lo is None or lo_open) else "["
+        right = ")" if (hi is None or hi_open) else "]"
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        raise InputError(field, value, f"{left}{lo_s}, {hi_s}{right}{(' ' + unit) if unit else ''}")
+    return v
