@@ -1,0 +1,292 @@
+"""The pump model: state, inputs and the one stepping entry point ``advance``.
+
+``advance(state, t_span, inputs) -> (state, outputs)`` is used by the CLI, the
+node and the offline runs alike.  Inputs (shaft speed, suction and delivery
+pressure) are held constant over one call and may change between calls; the
+shaft angle is integrated from the speed.  Everything is SI: rad, rad/s,
+Pa (absolute), m, m³/s, s.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..bearing.base import make_bearing
+from ..bearing.geometry import BearingGeometry
+from ..config import PumpConfig
+from ..errors import InputError, check_finite
+from ..geometry.lateral import lateral_geometry
+from ..geometry.tables import GeometryTables, cached_tables
+from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
+from . import kernel as K
+
+__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
+
+BEARING_MODELS = ("fixed", "mobility", "short", "fdm")
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Operating inputs held over one ``advance`` call.
+
+    Parameters
+    ----------
+    omega : float
+        Shaft speed [rad/s], ≥ 0.
+    p_suction : float
+        Suction pressure, absolute [Pa].
+    p_delivery : float
+        Delivery pressure, absolute [Pa] (ignored in ``restriction`` mode,
+        where the delivery pressure is a state).
+    """
+    omega: float
+    p_suction: float
+    p_delivery: float
+
+
+@dataclass(frozen=True)
+class PumpState:
+    """Everything ``advance`` carries from one call to the next."""
+    t: float                    #: time [s]
+    theta: float                #: shaft angle [rad] (unwrapped)
+    pressures: np.ndarray       #: (N+1,) chamber pressures and delivery-volume pressure [Pa]
+    eccentricity: np.ndarray    #: (2,) outer-gear centre displacement [m]
+    counters: np.ndarray = field(default_factory=lambda: np.zeros(K.N_COUNTERS, dtype=np.int64))
+    volumes: np.ndarray = field(default_factory=lambda: np.zeros(5))  #: ∫ of the 5 flows [m³]
+    swept_angle: float = 0.0    #: ∫ω dt since start [rad]
+
+    @property
+    def counts(self) -> dict:
+        """Solver steps and events so far."""
+        c = self.counters
+        return {"steps": int(c[K.C_STEPS]), "cavitation_clamps": int(c[K.C_CAVITATION]),
+                "contact_unloaded": int(c[K.C_CONTACT_UNLOADED]),
+                "housing_contact": int(c[K.C_HOUSING_CONTACT]),
+                "gear_contact_corrections": int(c[K.C_GEAR_CONTACT])}
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Per-step outputs of one ``advance`` call (row i is the state after step i)."""
+    t: np.ndarray                   #: time [s]
+    theta: np.ndarray               #: shaft angle [rad]
+    chamber_pressures: np.ndarray   #: (n, N) [Pa]
+    delivery_pressure: np.ndarray   #: [Pa]
+    delivery_flow: np.ndarray       #: net flow out of the delivery port [m³/s]
+    suction_flow: np.ndarray        #: flow in through the suction port [m³/s]
+    leak_suction_delivery: np.ndarray  #: [m³/s]
+    leak_drain: np.ndarray          #: [m³/s]
+    restriction_flow: np.ndarray    #: flow through the delivery restriction [m³/s]
+    eccentricity: np.ndarray        #: (n, 2) outer-gear displacement [m]
+    load: np.ndarray                #: (n, 2) load on the outer gear F_est [N]
+    gaps: np.ndarray                #: (n, N) tooth-tip gap heights [m]
+    inner_rotation: np.ndarray      #: γ [rad]
+    contact_lobe: np.ndarray        #: index of the lobe in contact
+    theoretical_flow: float         #: displacement × speed [m³/s]
+    volumetric_efficiency: float    #: mean delivered / theoretical over this call [-]
+
+    def __len__(self) -> int:
+        return self.t.size
+
+
+class PumpModel:
+    """Lumped-parameter Gerotor pump (sec. 3 of [1]) with a choice of outer-gear model.
+
+    Parameters
+    ----------
+    config : PumpConfig
+        Validated pump description.
+    bearing : {"fixed", "mobility", "short", "fdm"}
+        Outer-gear model: fixed centre, mobility method (the twin's default),
+        short bearing "Method 1", finite-difference Reynolds.
+    bearing_options : dict, optional
+        Passed to :func:`gerotor_twin.bearing.base.make_bearing` (e.g. the FDM grid).
+    """
+
+    def __init__(self, config: PumpConfig, bearing: str = "mobility", bearing_options: dict | None = None,
+                 tables: GeometryTables | None = None, progress=None):
+        if bearing not in BEARING_MODELS:
+            raise InputError("--model", bearing, " | ".join(BEARING_MODELS))
+        self.config = config
+        self.bearing_name = bearing
+        g = config.gears
+        self.geometry = g
+        self.N = g.chambers
+        self.tables = tables if tables is not None else cached_tables(
+            g, config.suction_port, config.delivery_port, config.numerics.table_points, progress)
+        self.lateral = lateral_geometry(g, config.suction_port, config.delivery_port)
+        self.bearing_geometry = BearingGeometry(length_m=g.width, diameter_m=2 * g.outer_radius,
+                                                clearance_m=config.clearances.housing_radial_m,
+                                                viscosity_pa_s=config.fluid.viscosity_pa_s)
+        self.bearing = None
+        if bearing in ("short", "fdm"):
+            self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
+        self.displacement = g.displacement_closed_form() if g.tip_clearance == 0 else \
+            replace(g, tip_clearance=0.0).displacement_closed_form()
+        self.params = self._kernel_params()
+
+    # ------------------------------------------------------------ parameters
+    def _kernel_params(self) -> np.ndarray:
+        c, f, lat = self.config, self.config.fluid, self.lateral
+        mu = f.viscosity_pa_s
+        h = c.clearances.lateral_m
+        prm = np.zeros(K.N_PARAMS)
+        prm[:7] = f.kernel_params()
+        prm[K.P_N] = self.N
+        prm[K.P_WIDTH] = self.geometry.width
+        prm[K.P_DELTA] = self.geometry.tip_clearance
+        prm[K.P_DH] = c.tip_dh
+        prm[K.P_CD] = c.orifice.cd_max
+        prm[K.P_LAMBDA] = c.orifice.lambda_crit
+        two_faces = 2.0
+        # conductances [m³/(s·Pa)] = flow at Δp = 1 Pa
+        prm[K.P_GLAT] = two_faces * sector_circumferential_flow(1.0, h, lat.chi_lobe, lat.lobe_r_in,
+                                                                lat.lobe_r_out, mu)[0]
+        prm[K.P_GSD] = two_faces * (sector_circumferential_flow(1.0, h, lat.chi1, lat.ring_r_in, lat.ring_r_out, mu)[0]
+                                    + sector_circumferential_flow(1.0, h, lat.chi2, lat.ring_r_in,
+                                                                  lat.ring_r_out, mu)[0])
+        prm[K.P_GDR] = two_faces * sector_radial_flow(1.0, h, lat.chi3, lat.drain_r_in, lat.drain_r_out, mu)[0]
+        prm[K.P_C] = c.clearances.housing_radial_m
+        prm[K.P_RJ] = self.geometry.outer_radius
+        prm[K.P_MODE] = 1.0 if c.boundary.mode == "restriction" else 0.0
+        prm[K.P_VLINE] = c.boundary.delivery_volume_m3
+        prm[K.P_AREST] = c.boundary.restriction_area_m2
+        prm[K.P_PTANK] = f.atmospheric_pa
+        prm[K.P_EPSMAX] = 0.95
+        return prm
+
+    @property
+    def restriction_mode(self) -> bool:
+        return self.config.boundary.mode == "restriction"
+
+    def theoretical_flow(self, omega: float) -> float:
+        """Displacement × speed [m³/s]."""
+        return self.displacement * omega / (2 * math.pi)
+
+    # ---------------------------------------------------------------- inputs
+    def check_inputs(self, inputs: Inputs) -> Inputs:
+        """Validate inputs against the documented envelope; raise :class:`InputError`."""
+        rng, p_atm = self.config.range, self.config.fluid.atmospheric_pa
+        w = check_finite("shaft_speed", inputs.omega)
+        wmax = rng.max_speed_rpm * 2 * math.pi / 60
+        if not 0.0 <= w <= wmax * 1.0001:
+            raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{rng.max_speed_rpm:g} rpm)")
+        ps = check_finite("suction_pressure", inputs.p_suction)
+        if not 1e4 <= ps <= 5e5:
+            raise InputError("suction_pressure", ps, "[10000, 500000] Pa absolute")
+        pd = check_finite("delivery_pressure", inputs.p_delivery)
+        pmax = p_atm + rng.max_delivery_bar * 1e5
+        if not (self.restriction_mode or ps - 0.5e5 <= pd <= pmax * 1.0001):
+            raise InputError("delivery_pressure", pd,
+                             f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (0–{rng.max_delivery_bar:g} bar gauge)")
+        return Inputs(w, ps, pd)
+
+    # ---------------------------------------------------------------- state
+    def initial_state(self, inputs: Inputs, theta: float = 0.0, t: float = 0.0) -> PumpState:
+        """Chambers at suction pressure, delivery volume at the delivery pressure, centred gear."""
+        inputs = self.check_inputs(inputs)
+        y = np.full(self.N + 1, inputs.p_suction)
+        y[self.N] = inputs.p_delivery if not self.restriction_mode else inputs.p_suction
+        return PumpState(t=t, theta=theta, pressures=y, eccentricity=np.zeros(2))
+
+    def step_size(self, omega: float) -> float:
+        """Integration step [s]: the configured angle step, capped in time."""
+        n = self.config.numerics
+        h_ang = math.radians(n.max_step_deg) / omega if omega > 0 else math.inf
+        return min(h_ang, n.max_step_s)
+
+    # -------------------------------------------------------------- advance
+    def advance(self, state: PumpState, t_span: float | tuple, inputs: Inputs) -> tuple[PumpState, Outputs]:
+        """Advance the model over ``t_span`` with constant ``inputs``.
+
+        Parameters
+        ----------
+        state : PumpState
+            State at the start.
+        t_span : float or (t0, t1)
+            Duration [s] or an interval whose start must equal ``state.t``.
+        inputs : Inputs
+            Shaft speed [rad/s], suction and delivery pressure [Pa].
+
+        Returns
+        -------
+        (PumpState, Outputs)
+            The new state and one output row per integration step.
+        """
+        inputs = self.check_inputs(inputs)
+        dt = float(t_span[1] - t_span[0]) if isinstance(t_span, tuple) else float(t_span)
+        if not (math.isfinite(dt) and dt >= 0):
+            raise InputError("t_span", t_span, "a finite, non-negative duration [s]")
+        h0 = self.step_size(inputs.omega)
+        n = max(1, int(math.ceil(dt / h0 - 1e-9))) if dt > 0 else 0
+        h = dt / n if n else 0.0
+        y = state.pressures.copy()
+        e = state.eccentricity.copy()
+        counters = state.counters.copy()
+        vols = state.volumes.copy()
+        rec = np.zeros((n, K.N_REC))
+        rec_p = np.zeros((n, self.N))
+        rec_g = np.zeros((n, self.N))
+        tab = self.tables
+        if not self.restriction_mode:
+            y[self.N] = inputs.p_delivery
+        theta, t = state.theta, state.t
+        if n:
+            if self.bearing is None:
+                kind = K.BEARING_MOBILITY if self.bearing_name == "mobility" else K.BEARING_FIXED
+                theta, t = K.integrate(y, e, theta, t, inputs.omega, inputs.p_suction, inputs.p_delivery, n, h,
+                                       tab.data, tab.period, tab.shift, self.params, kind,
+                                       rec, rec_p, rec_g, counters, vols)
+            else:
+                theta, t = self._integrate_external(y, e, theta, t, inputs, n, h, rec, rec_p, rec_g,
+                                                    counters, vols)
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
+            raise FloatingPointError("pump model produced a non-finite state (solver failure)")
+        swept = state.swept_angle + inputs.omega * dt
+        new = PumpState(t=t, theta=theta, pressures=y, eccentricity=e, counters=counters, volumes=vols,
+                        swept_angle=swept)
+        return new, self._outputs(rec, rec_p, rec_g, inputs, vols - state.volumes, dt)
+
+    def _integrate_external(self, y, e, theta, t, inputs, n, h, rec, rec_p, rec_g, counters, vols):
+        """Python-level loop for the slow bearing models (short, FDM): same kernels, per step."""
+        tab, prm, N = self.tables, self.params, self.N
+        omega2 = inputs.omega * (N - 1) / N
+        coef = np.empty(9)
+        gaps = np.empty(N)
+        c = prm[K.P_C]
+        for i in range(n):
+            theta, t = K.integrate(y, e, theta, t, inputs.omega, inputs.p_suction, inputs.p_delivery, 1, h,
+                                   tab.data, tab.period, tab.shift, prm, K.BEARING_EXTERNAL,
+                                   rec[i:i + 1], rec_p[i:i + 1], rec_g[i:i + 1], counters, vols)
+            kc = int(rec[i, K.R_KC])
+            f1 = K.outer_gear_load(y, theta, inputs.omega, e[0], e[1], kc, tab.data, tab.period, tab.shift, prm)
+            d1 = self.bearing.velocity(e.copy(), np.array(f1[:2]), omega2)
+            px, py, _, kc2 = K.contact(tab.data, tab.period, tab.shift, N, prm[K.P_DELTA], theta,
+                                       e[0] + h * d1[0], e[1] + h * d1[1], gaps, coef)
+            f2 = K.outer_gear_load(y, theta, inputs.omega, px, py, kc2, tab.data, tab.period, tab.shift, prm)
+            d2 = self.bearing.velocity(np.array([px, py]), np.array(f2[:2]), omega2)
+            ex, ey = e + 0.5 * h * (d1 + d2)
+            en = math.hypot(ex, ey)
+            if en > prm[K.P_EPSMAX] * c:
+                ex, ey = ex * prm[K.P_EPSMAX] * c / en, ey * prm[K.P_EPSMAX] * c / en
+                counters[K.C_HOUSING_CONTACT] += 1
+            ex, ey, gam, kc = K.contact(tab.data, tab.period, tab.shift, N, prm[K.P_DELTA], theta, ex, ey, gaps, coef)
+            e[0], e[1] = ex, ey
+            rec[i, K.R_EX], rec[i, K.R_EY], rec[i, K.R_GAMMA], rec[i, K.R_KC] = ex, ey, gam, kc
+            rec[i, K.R_FX], rec[i, K.R_FY] = f1[0], f1[1]
+            rec[i, K.R_MIN_GAP] = gaps.min()
+            rec_g[i] = gaps
+        return theta, t
+
+    def _outputs(self, rec, rec_p, rec_g, inputs: Inputs, dvol, dt) -> Outputs:
+        qth = self.theoretical_flow(inputs.omega)
+        eta = float(dvol[0] / (qth * dt)) if qth > 0 and dt > 0 else float("nan")
+        return Outputs(
+            t=rec[:, K.R_T], theta=rec[:, K.R_THETA], chamber_pressures=rec_p,
+            delivery_pressure=rec[:, K.R_PD], delivery_flow=rec[:, K.R_QDEL], suction_flow=rec[:, K.R_QSUC],
+            leak_suction_delivery=rec[:, K.R_QSD], leak_drain=rec[:, K.R_QDR],
+            restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, [K.R_EX, K.R_EY]],
+            load=rec[:, [K.R_FX, K.R_FY]], gaps=rec_g, inner_rotation=rec[:, K.R_GAMMA],
+            contact_lobe=rec[:, K.R_KC].astype(int), theoretical_flow=qth, volumetric_efficiency=eta)
