@@ -16,7 +16,8 @@ where h = δ exactly:
 
 with g and H from central differences of the exact function.  Over the
 reachable displacements (|e| ≤ c ≈ 0.1 mm) the remainder is O(|z|³/ρ²),
-below 1e-9 m; the tests check the tables against the exact geometry.
+below 0.3 µm (measured: 0.23 µm at |e| = c, |γ| = 2 mrad); the tests check
+the tables against the exact geometry.
 
 The equivalent length uses the osculating-circle form
 le = 2√(2 h dh / κ_rel), κ_rel = 1/r + κ_Γ (κ_Γ the curvature of the inner

@@ -1,8 +1,14 @@
 """Compiled hot loop of the pump model: right-hand side, Jacobian, stepper.
 
-State vector y (length N+1): the N chamber pressures and the delivery-volume
-pressure (a state in ``restriction`` mode; held at the imposed value in
-``imposed`` mode).  All pressures absolute [Pa].
+State vector y (length N+1): the log-densities y = ln(ρ/ρ₀) of the N
+chambers and of the delivery volume (a state in ``restriction`` mode; held at
+the imposed pressure in ``imposed`` mode).  Pressures follow from the
+barotropic equation of state, dp = β(p) dy, β of eq. (23) smoothed
+(:mod:`gerotor_twin.hydraulics.fluid`).  Carrying ln ρ instead of p makes the
+mass balance exact and removes the dβ/dp feedback of the cavitation switch
+from the Jacobian: in a cavitating chamber (β → 0 towards the vapour
+pressure) inflow raises y while p stays near the floor, as a collapsing
+vapour fraction would; p never falls below the vapour pressure.
 
 Continuity (eq. 20 of [1], corrected: dp/dθ = β/(Vω)(ΣQ − ω dV/dθ); the
 printed 1/ω_int factor is not dimensionally right), written in time and in
@@ -48,8 +54,9 @@ from ..hydraulics.orifice import orifice_flow
 
 # ---------------------------------------------------------------- parameters
 P_N, P_WIDTH, P_DELTA, P_DH, P_CD, P_LAMBDA, P_GLAT, P_GSD, P_GDR, P_C, P_RJ, P_MODE, P_VLINE, \
-    P_AREST, P_PTANK, P_EPSMAX = range(7, 23)
-N_PARAMS = 23
+    P_AREST, P_PTANK, P_EPSMAX, P_PHI, P_SHI, P_PLO, P_SLO, P_ATOL = range(7, 28)
+N_PARAMS = 28
+BAND_NODES = 256   # tabulated inverse of the equation of state inside the switch band (appended to prm)
 
 # ------------------------------------------------------------------ outputs
 # per-step record columns besides the chamber pressures and gaps
@@ -58,8 +65,9 @@ R_T, R_THETA, R_QDEL, R_QSUC, R_QSD, R_QDR, R_QREST, R_PD, R_EX, R_EY, R_FX, R_F
 N_REC = 15
 
 # counters
-C_STEPS, C_CAVITATION, C_CONTACT_UNLOADED, C_HOUSING_CONTACT, C_GEAR_CONTACT = range(5)
-N_COUNTERS = 5
+C_STEPS, C_CAVITATION, C_CONTACT_UNLOADED, C_HOUSING_CONTACT, C_GEAR_CONTACT, C_SUBSTEPS, C_REJECTED, \
+    C_FAILED = range(8)
+N_COUNTERS = 8
 
 BEARING_FIXED, BEARING_MOBILITY, BEARING_EXTERNAL = 0, 1, 2
 
@@ -152,17 +160,61 @@ def contact(tab, period, shift, N, delta, theta, ex, ey, h_out, coef):
         ey -= s * uy
     kc = 0
     for k in range(N):
-        h_out[k] = _gap_value(cmat[k], delta, ex, ey, gamma)
+        h_out[k] = max(_gap_value(cmat[k], delta, ex, ey, gamma), 0.0)
         if h_out[k] < h_out[kc]:
             kc = k
     return ex, ey, gamma, kc
 
 
 @njit
-def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want_jac, flows):
-    """Right-hand side dy/dt [Pa/s] (and its Jacobian) at shaft angle θ.
+def log_density_of(p, prm):
+    """ln(ρ(p)/ρ₀) [-]: closed forms outside the switch band, quadrature inside.
 
-    ``flows`` receives (q_delivery_out, q_suction_in, q_sd, q_drain, q_restriction) [m³/s].
+    Same function as :func:`gerotor_twin.hydraulics.fluid.log_density`, with the
+    band-end anchors precomputed in ``prm`` (P_SLO, P_SHI).
+    """
+    if p >= prm[P_PHI]:
+        return prm[P_SHI] + (p - prm[P_PHI]) / prm[FP_BULK_MODULUS]
+    if p >= prm[P_PLO]:
+        return log_density(p, prm[FP_BULK_MODULUS], prm[FP_CAVITATION_RATIO], prm[FP_ATMOSPHERIC],
+                           prm[FP_SWITCH_BAND], prm[FP_VAPOUR])
+    width = prm[P_PLO] - prm[FP_VAPOUR]
+    beta_low = prm[FP_BULK_MODULUS] / prm[FP_CAVITATION_RATIO]
+    sig = max((p - prm[FP_VAPOUR]) / width, 1e-300)
+    return prm[P_SLO] + 0.5 * width / beta_low * math.log(sig / (2.0 - sig))
+
+
+@njit
+def pressure_of(s, prm):
+    """Absolute pressure [Pa] of log-density s (inverse of :func:`log_density_of`)."""
+    if s >= prm[P_SHI]:
+        return prm[P_PHI] + (s - prm[P_SHI]) * prm[FP_BULK_MODULUS]   # liquid, β = β*
+    width = prm[P_PLO] - prm[FP_VAPOUR]
+    if s <= prm[P_SLO]:                                                 # vapour floor, closed form
+        beta_low = prm[FP_BULK_MODULUS] / prm[FP_CAVITATION_RATIO]
+        x = 2.0 * (s - prm[P_SLO]) * beta_low / width
+        if x < -700.0:
+            return prm[FP_VAPOUR]
+        big_e = math.exp(x)
+        return prm[FP_VAPOUR] + width * 2.0 * big_e / (1.0 + big_e)
+    # inside the switch band: tabulated inverse (uniform in s), then one Newton step (dp/ds = β)
+    x = (s - prm[P_SLO]) / (prm[P_SHI] - prm[P_SLO]) * (BAND_NODES - 1)
+    i = min(int(x), BAND_NODES - 2)
+    f = x - i
+    p = prm[N_PARAMS + i] * (1.0 - f) + prm[N_PARAMS + i + 1] * f
+    beta, _d = bulk_modulus(p, prm[FP_BULK_MODULUS], prm[FP_CAVITATION_RATIO], prm[FP_ATMOSPHERIC],
+                            prm[FP_SWITCH_BAND], prm[FP_VAPOUR])
+    return p - (log_density_of(p, prm) - s) * beta
+
+
+@njit
+def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want_jac, flows):
+    """Right-hand side dy/dt of the log-densities y = ln(ρ/ρ₀) [1/s], and ∂f/∂y.
+
+    Mass conservation per volume: d(ρV)/dt = Σ ρ_up Q, i.e.
+    dy_j/dt = (Σ (ρ_up/ρ_j) Q − ω dV_j/dθ) / V_j, and dp = β dy, so this is
+    eq. (20) (corrected) multiplied through by 1/β.  ``flows`` receives
+    (q_delivery_out, q_suction_in, q_sd, q_drain, q_restriction) [m³/s].
     """
     N = int(prm[P_N])
     beta_s, ratio, p_atm = prm[FP_BULK_MODULUS], prm[FP_CAVITATION_RATIO], prm[FP_ATMOSPHERIC]
@@ -171,13 +223,20 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
     cd, lam = prm[P_CD], prm[P_LAMBDA]
     b, dh, glat = prm[P_WIDTH], prm[P_DH], prm[P_GLAT]
     restriction = prm[P_MODE] > 0.5
-    pd = y[N] if restriction else pd_in
     n1 = N + 1
+    p = np.empty(n1)
+    beta = np.empty(n1)
     s = np.empty(n1)
-    for i in range(N):
-        s[i] = log_density(y[i], beta_s, ratio, p_atm, band, p_vap)
-    s[N] = log_density(pd, beta_s, ratio, p_atm, band, p_vap)
-    s_ps = log_density(ps, beta_s, ratio, p_atm, band, p_vap)
+    for i in range(n1):
+        if i == N and not restriction:
+            p[i] = pd_in
+            s[i] = log_density_of(pd_in, prm)
+        else:
+            p[i] = pressure_of(y[i], prm)
+            s[i] = y[i]
+        beta[i], _db = bulk_modulus(p[i], beta_s, ratio, p_atm, band, p_vap)
+    pd = p[N]
+    s_ps = log_density_of(ps, prm)
     acc = np.zeros(n1)        # Σ (ρ_up/ρ_i) Q_i into each volume [m³/s]
     if want_jac:
         for i in range(n1):
@@ -185,18 +244,22 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
                 jac[i, k] = 0.0
     q_del = 0.0
     q_suc = 0.0
+    m_suc = 0.0
+    m_del = 0.0
     for j in range(N):
         tj = theta + j * shift
-        pj = y[j]
+        pj = p[j]
         # suction port -> chamber j, eq. (21)
         q, dq = orifice_flow(ps - pj, interp(tab, AS, tj, period), cd, lam, rho, mu)
         fac = math.exp(s_ps - s[j]) if q > 0.0 else 1.0
         acc[j] += fac * q
         q_suc += q
+        m_suc += math.exp(s_ps if q > 0.0 else s[j]) * q
         if want_jac:
-            jac[j, j] -= fac * dq
+            jac[j, j] -= fac * dq * beta[j]
         # delivery port -> chamber j
         q, dq = orifice_flow(pd - pj, interp(tab, AD, tj, period), cd, lam, rho, mu)
+        m_del -= math.exp(s[N] if q > 0.0 else s[j]) * q
         if q > 0.0:
             acc[j] += math.exp(s[N] - s[j]) * q
             acc[N] -= q
@@ -207,10 +270,10 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
             acc[N] -= fd * q
             q_del -= fd * q
         if want_jac:
-            jac[j, j] -= dq
-            jac[N, j] += dq
-            jac[j, N] += dq
-            jac[N, N] -= dq
+            jac[j, j] -= dq * beta[j]
+            jac[N, j] += dq * beta[j]
+            jac[j, N] += dq * beta[N]
+            jac[N, N] -= dq * beta[N]
         # tooth-tip gap at lobe j: chamber j-1 -> chamber j, eq. (22)
         jm = (j - 1) % N
         hk = h_gap[j]
@@ -219,9 +282,9 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
         if hk > 0.0:
             krel = interp(tab, KREL, tj, period)
             le = 2.0 * math.sqrt(2.0 * hk * dh / krel)
-            q, dq = tooth_tip_flow(y[jm] - pj, hk, le, omega * interp(tab, VR, tj, period), b, mu)
+            q, dq = tooth_tip_flow(p[jm] - pj, hk, le, omega * interp(tab, VR, tj, period), b, mu)
         # lateral leakage across the lobe land, sec. 3.2
-        q += glat * (y[jm] - pj)
+        q += glat * (p[jm] - pj)
         dq += glat
         if q > 0.0:
             acc[j] += math.exp(s[jm] - s[j]) * q
@@ -230,38 +293,34 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
             acc[j] += q
             acc[jm] -= math.exp(s[j] - s[jm]) * q
         if want_jac:
-            jac[j, jm] += dq
-            jac[j, j] -= dq
-            jac[jm, jm] -= dq
-            jac[jm, j] += dq
+            jac[j, jm] += dq * beta[jm]
+            jac[j, j] -= dq * beta[j]
+            jac[jm, jm] -= dq * beta[jm]
+            jac[jm, j] += dq * beta[j]
     # suction-delivery (sec. 3.3) and drain (sec. 3.4) leakages leave the delivery volume
     q_sd = prm[P_GSD] * (pd - ps)
     q_dr = prm[P_GDR] * (pd - ps)
     q_rest = 0.0
+    dqr = 0.0
     acc[N] -= q_sd + q_dr
     if restriction:
         q_rest, dqr = orifice_flow(pd - prm[P_PTANK], prm[P_AREST], cd, lam, rho, mu)
         acc[N] -= q_rest
-    # assemble
+    # assemble: dy/dt = (Σ ρ-weighted Q − ω dV/dθ) / V
     for j in range(N):
         tj = theta + j * shift
         vol = interp(tab, V, tj, period)
-        beta, dbeta = bulk_modulus(y[j], beta_s, ratio, p_atm, band, p_vap)
-        net = acc[j] - omega * interp(tab, DV, tj, period)
-        f[j] = beta / vol * net
+        f[j] = (acc[j] - omega * interp(tab, DV, tj, period)) / vol
         if want_jac:
             for k in range(n1):
-                jac[j, k] *= beta / vol
-            jac[j, j] += dbeta / vol * net
+                jac[j, k] /= vol
     if restriction:
-        beta, dbeta = bulk_modulus(pd, beta_s, ratio, p_atm, band, p_vap)
         vl = prm[P_VLINE]
-        f[N] = beta / vl * acc[N]
+        f[N] = acc[N] / vl
         if want_jac:
-            jac[N, N] -= prm[P_GSD] + prm[P_GDR] + dqr
+            jac[N, N] -= (prm[P_GSD] + prm[P_GDR] + dqr) * beta[N]
             for k in range(n1):
-                jac[N, k] *= beta / vl
-            jac[N, N] += dbeta / vl * acc[N]
+                jac[N, k] /= vl
     else:
         f[N] = 0.0
         if want_jac:
@@ -273,6 +332,8 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
     flows[2] = q_sd
     flows[3] = q_dr
     flows[4] = q_rest
+    flows[5] = m_suc
+    flows[6] = m_del
 
 
 @njit
@@ -315,8 +376,8 @@ def outer_gear_load(y, theta, omega, ex, ey, kc, tab, period, shift, prm):
 
 
 @njit
-def pressure_step(y, theta, omega, ps, pd, h, h_gap0, h_gap1, tab, period, shift, prm, ynew, flows):
-    """One ROS2 step of the pressures over dt = h (gaps at the two stage angles given)."""
+def ros2_step(y, theta, omega, ps, pd, h, h_gap0, h_gap1, tab, period, shift, prm, ynew, err, flows):
+    """One ROS2 step over dt = h (gaps at the two stage angles); ``err`` gets the embedded error."""
     n1 = y.shape[0]
     f0 = np.empty(n1)
     f1 = np.empty(n1)
@@ -331,17 +392,66 @@ def pressure_step(y, theta, omega, ps, pd, h, h_gap0, h_gap1, tab, period, shift
     k2 = np.linalg.solve(w, f1 - 2.0 * k1)
     for i in range(n1):
         ynew[i] = y[i] + 1.5 * h * k1[i] + 0.5 * h * k2[i]
+        err[i] = 0.5 * h * (k1[i] + k2[i])        # against the embedded first-order y + h k1
 
 
 @njit
-def _clamp_floor(y, p_floor, restriction):
-    n = y.shape[0] if restriction else y.shape[0] - 1
-    hits = 0
-    for i in range(n):
-        if y[i] < p_floor:
-            y[i] = p_floor
-            hits += 1
-    return hits
+def pressure_step(y, theta, omega, ps, pd, big_h, ex, ey, tab, period, shift, prm, ctrl, counters):
+    """Advance the pressures over one output step ``big_h`` [s] with adaptive ROS2 sub-steps.
+
+    The gear displacement (ex, ey) is frozen over the step; the gaps follow
+    the shaft angle.  ``ctrl[0]`` carries the proposed sub-step between calls.
+    Error control on the log-densities with absolute tolerance ``prm[P_ATOL]``.
+    """
+    N = int(prm[P_N])
+    n1 = y.shape[0]
+    coef = np.empty(9)
+    g0 = np.empty(N)
+    g1 = np.empty(N)
+    ynew = np.empty(n1)
+    err = np.empty(n1)
+    flows = np.empty(7)
+    atol = prm[P_ATOL]
+    delta = prm[P_DELTA]
+    h = big_h if ctrl[0] <= 0.0 else min(big_h, ctrl[0])
+    h_min = big_h * 1e-5
+    done = 0.0
+    while done < big_h * (1.0 - 1e-12):
+        h = min(h, big_h - done)
+        th = theta + omega * done
+        contact(tab, period, shift, N, delta, th, ex, ey, g0, coef)
+        contact(tab, period, shift, N, delta, th + omega * h, ex, ey, g1, coef)
+        ros2_step(y, th, omega, ps, pd, h, g0, g1, tab, period, shift, prm, ynew, err, flows)
+        en = 0.0
+        for i in range(n1):
+            v = abs(err[i]) / atol
+            if not (v <= en):          # also catches NaN
+                en = v
+        if en <= 1.0 or h <= h_min:
+            if en > 1.0 or not np.all(np.isfinite(ynew)):
+                counters[C_FAILED] += 1
+                if not np.all(np.isfinite(ynew)):
+                    return
+            for i in range(n1):
+                y[i] = ynew[i]
+            done += h
+            counters[C_SUBSTEPS] += 1
+        else:
+            counters[C_REJECTED] += 1
+        fac = 4.0 if en < 1e-8 else min(4.0, max(0.2, 0.9 / math.sqrt(en)))
+        h = max(h * fac, h_min)
+    ctrl[0] = h
+
+
+@njit
+def to_pressures(y, prm, out):
+    """Pressures [Pa] of the log-density state; returns how many volumes are cavitating."""
+    cav = 0
+    for i in range(y.shape[0]):
+        out[i] = pressure_of(y[i], prm)
+        if out[i] < prm[FP_ATMOSPHERIC] - 0.5 * prm[FP_SWITCH_BAND]:
+            cav += 1
+    return cav
 
 
 @njit
@@ -362,11 +472,10 @@ def integrate(y, e, theta, t, omega, ps, pd, n_steps, h, tab, period, shift, prm
     coef = np.empty(9)
     g0 = np.empty(N)
     g1 = np.empty(N)
-    ynew = np.empty(y.shape[0])
-    flows = np.empty(5)
-    flows_prev = np.empty(5)
+    flows = np.empty(7)
+    flows_prev = np.empty(7)
     ex, ey = e[0], e[1]
-    p_floor = prm[FP_VAPOUR] + 1.0
+    pres = np.empty(y.shape[0])
     omega2 = omega * (N - 1) / N
     # flows at the start of the step (for trapezoidal accumulation)
     ex, ey, gam, kc = contact(tab, period, shift, N, delta, theta, ex, ey, g0, coef)
@@ -375,25 +484,22 @@ def integrate(y, e, theta, t, omega, ps, pd, n_steps, h, tab, period, shift, prm
     rhs(y, theta, omega, ps, pd, g0, tab, period, shift, prm, fdum, jdum, False, flows_prev)
     for n in range(n_steps):
         ex, ey, gam, kc = contact(tab, period, shift, N, delta, theta, ex, ey, g0, coef)
-        _x, _y, _g, _k = contact(tab, period, shift, N, delta, theta + omega * h, ex, ey, g1, coef)
-        pressure_step(y, theta, omega, ps, pd, h, g0, g1, tab, period, shift, prm, ynew, flows)
-        counters[C_CAVITATION] += _clamp_floor(ynew, p_floor, restriction)
-        for i in range(y.shape[0]):
-            y[i] = ynew[i]
+        pressure_step(y, theta, omega, ps, pd, h, ex, ey, tab, period, shift, prm, acc[5:6], counters)
         if not restriction:
-            y[N] = pd
+            y[N] = log_density_of(pd, prm)
+        counters[C_CAVITATION] += to_pressures(y, prm, pres)
         theta_new = theta + omega * h
         fx = 0.0
         fy = 0.0
         if bearing_kind == BEARING_MOBILITY:
             # Heun on the journal centre, load from the new pressures
-            fx, fy, fc, unl = outer_gear_load(y, theta_new, omega, ex, ey, kc, tab, period, shift, prm)
+            fx, fy, fc, unl = outer_gear_load(pres, theta_new, omega, ex, ey, kc, tab, period, shift, prm)
             counters[C_CONTACT_UNLOADED] += unl
             d1x, d1y = mobility_velocity(ex, ey, fx, fy, omega2, c, prm[P_WIDTH], 2.0 * prm[P_RJ],
                                          prm[FP_VISCOSITY])
             px, py, _g, kc2 = contact(tab, period, shift, N, delta, theta_new, ex + h * d1x, ey + h * d1y,
                                       g1, coef)
-            fx2, fy2, fc2, unl2 = outer_gear_load(y, theta_new, omega, px, py, kc2, tab, period, shift, prm)
+            fx2, fy2, fc2, unl2 = outer_gear_load(pres, theta_new, omega, px, py, kc2, tab, period, shift, prm)
             d2x, d2y = mobility_velocity(px, py, fx2, fy2, omega2, c, prm[P_WIDTH], 2.0 * prm[P_RJ],
                                          prm[FP_VISCOSITY])
             ex += 0.5 * h * (d1x + d2x)
@@ -404,14 +510,15 @@ def integrate(y, e, theta, t, omega, ps, pd, n_steps, h, tab, period, shift, prm
                 ey *= epsmax * c / en
                 counters[C_HOUSING_CONTACT] += 1
         elif bearing_kind == BEARING_FIXED:
-            fx, fy, fc, unl = outer_gear_load(y, theta_new, omega, ex, ey, kc, tab, period, shift, prm)
+            fx, fy, fc, unl = outer_gear_load(pres, theta_new, omega, ex, ey, kc, tab, period, shift, prm)
         ex0, ey0 = ex, ey
         ex, ey, gam, kc = contact(tab, period, shift, N, delta, theta_new, ex, ey, g1, coef)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
         rhs(y, theta_new, omega, ps, pd, g1, tab, period, shift, prm, fdum, jdum, False, flows)
-        for i in range(5):
-            acc[i] += 0.5 * h * (flows_prev[i] + flows[i])
+        for i in range(7):
+            k = i if i < 5 else i + 1          # acc[5] is the sub-step carrier
+            acc[k] += 0.5 * h * (flows_prev[i] + flows[i])
             flows_prev[i] = flows[i]
         theta = theta_new
         t += h
@@ -423,7 +530,7 @@ def integrate(y, e, theta, t, omega, ps, pd, n_steps, h, tab, period, shift, prm
         rec[n, R_QSD] = flows[2]
         rec[n, R_QDR] = flows[3]
         rec[n, R_QREST] = flows[4]
-        rec[n, R_PD] = y[N]
+        rec[n, R_PD] = pres[N]
         rec[n, R_EX] = ex
         rec[n, R_EY] = ey
         rec[n, R_FX] = fx
@@ -432,7 +539,7 @@ def integrate(y, e, theta, t, omega, ps, pd, n_steps, h, tab, period, shift, prm
         rec[n, R_KC] = kc
         rec[n, R_MIN_GAP] = np.min(g1)
         for i in range(N):
-            rec_p[n, i] = y[i]
+            rec_p[n, i] = pres[i]
             rec_gap[n, i] = g1[i]
     e[0] = ex
     e[1] = ey

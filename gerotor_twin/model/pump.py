@@ -19,6 +19,7 @@ from ..config import PumpConfig
 from ..errors import InputError, check_finite
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
+from ..hydraulics.fluid import log_density
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from . import kernel as K
 
@@ -51,10 +52,11 @@ class PumpState:
     """Everything ``advance`` carries from one call to the next."""
     t: float                    #: time [s]
     theta: float                #: shaft angle [rad] (unwrapped)
-    pressures: np.ndarray       #: (N+1,) chamber pressures and delivery-volume pressure [Pa]
+    log_density: np.ndarray     #: (N+1,) ln(ρ/ρ₀) of the chambers and the delivery volume [-]
+    pressures: np.ndarray       #: (N+1,) the matching absolute pressures [Pa] (derived, for callers)
     eccentricity: np.ndarray    #: (2,) outer-gear centre displacement [m]
     counters: np.ndarray = field(default_factory=lambda: np.zeros(K.N_COUNTERS, dtype=np.int64))
-    volumes: np.ndarray = field(default_factory=lambda: np.zeros(5))  #: ∫ of the 5 flows [m³]
+    volumes: np.ndarray = field(default_factory=lambda: np.zeros(8))  #: ∫ flows [m³], last sub-step [s], port masses/ρ₀ [m³]
     swept_angle: float = 0.0    #: ∫ω dt since start [rad]
 
     @property
@@ -64,7 +66,9 @@ class PumpState:
         return {"steps": int(c[K.C_STEPS]), "cavitation_clamps": int(c[K.C_CAVITATION]),
                 "contact_unloaded": int(c[K.C_CONTACT_UNLOADED]),
                 "housing_contact": int(c[K.C_HOUSING_CONTACT]),
-                "gear_contact_corrections": int(c[K.C_GEAR_CONTACT])}
+                "gear_contact_corrections": int(c[K.C_GEAR_CONTACT]),
+                "substeps": int(c[K.C_SUBSTEPS]), "rejected_substeps": int(c[K.C_REJECTED]),
+                "solver_failures": int(c[K.C_FAILED])}
 
 
 @dataclass(frozen=True)
@@ -86,9 +90,32 @@ class Outputs:
     contact_lobe: np.ndarray        #: index of the lobe in contact
     theoretical_flow: float         #: displacement × speed [m³/s]
     volumetric_efficiency: float    #: mean delivered / theoretical over this call [-]
+    port_mass_in: float = 0.0       #: mass through the suction ports over this call / ρ₀ [m³]
+    port_mass_out: float = 0.0      #: mass through the delivery ports over this call / ρ₀ [m³]
 
     def __len__(self) -> int:
         return self.t.size
+
+
+def _eos_args(f) -> tuple:
+    """(β*, ratio, p_atm, band, p_vap): the argument order of the fluid kernels."""
+    return (f.bulk_modulus_pa, f.cavitation_ratio, f.atmospheric_pa, f.switch_band_pa, f.vapour_pressure_pa)
+
+
+def _band_inverse(prm, fluid) -> np.ndarray:
+    """Pressures at BAND_NODES log-densities spread uniformly over the switch band (root finding)."""
+    from scipy.optimize import brentq
+    fp = _eos_args(fluid)
+    s_nodes = np.linspace(prm[K.P_SLO], prm[K.P_SHI], K.BAND_NODES)
+    out = np.empty(K.BAND_NODES)
+    for i, sv in enumerate(s_nodes):
+        if i == 0:
+            out[i] = prm[K.P_PLO]
+        elif i == K.BAND_NODES - 1:
+            out[i] = prm[K.P_PHI]
+        else:
+            out[i] = brentq(lambda p: log_density(p, *fp) - sv, prm[K.P_PLO], prm[K.P_PHI], xtol=1e-10)
+    return out
 
 
 class PumpModel:
@@ -132,7 +159,7 @@ class PumpModel:
         c, f, lat = self.config, self.config.fluid, self.lateral
         mu = f.viscosity_pa_s
         h = c.clearances.lateral_m
-        prm = np.zeros(K.N_PARAMS)
+        prm = np.zeros(K.N_PARAMS + K.BAND_NODES)
         prm[:7] = f.kernel_params()
         prm[K.P_N] = self.N
         prm[K.P_WIDTH] = self.geometry.width
@@ -155,6 +182,12 @@ class PumpModel:
         prm[K.P_AREST] = c.boundary.restriction_area_m2
         prm[K.P_PTANK] = f.atmospheric_pa
         prm[K.P_EPSMAX] = 0.95
+        prm[K.P_PHI] = f.atmospheric_pa + 0.5 * f.switch_band_pa
+        prm[K.P_PLO] = f.atmospheric_pa - 0.5 * f.switch_band_pa
+        prm[K.P_SHI] = log_density(prm[K.P_PHI], *_eos_args(f))
+        prm[K.P_SLO] = log_density(prm[K.P_PLO], *_eos_args(f))
+        prm[K.P_ATOL] = c.numerics.tolerance
+        prm[K.N_PARAMS:] = _band_inverse(prm, f)
         return prm
 
     @property
@@ -187,9 +220,13 @@ class PumpModel:
     def initial_state(self, inputs: Inputs, theta: float = 0.0, t: float = 0.0) -> PumpState:
         """Chambers at suction pressure, delivery volume at the delivery pressure, centred gear."""
         inputs = self.check_inputs(inputs)
-        y = np.full(self.N + 1, inputs.p_suction)
-        y[self.N] = inputs.p_delivery if not self.restriction_mode else inputs.p_suction
-        return PumpState(t=t, theta=theta, pressures=y, eccentricity=np.zeros(2))
+        p = np.full(self.N + 1, inputs.p_suction)
+        p[self.N] = inputs.p_delivery if not self.restriction_mode else inputs.p_suction
+        for j in range(self.N):        # chambers open to the delivery port start at its pressure
+            if self.tables.column("AD", theta, j) > 0:
+                p[j] = p[self.N]
+        y = np.array([K.log_density_of(v, self.params) for v in p])
+        return PumpState(t=t, theta=theta, log_density=y, pressures=p, eccentricity=np.zeros(2))
 
     def step_size(self, omega: float) -> float:
         """Integration step [s]: the configured angle step, capped in time."""
@@ -222,7 +259,7 @@ class PumpModel:
         h0 = self.step_size(inputs.omega)
         n = max(1, int(math.ceil(dt / h0 - 1e-9))) if dt > 0 else 0
         h = dt / n if n else 0.0
-        y = state.pressures.copy()
+        y = state.log_density.copy()
         e = state.eccentricity.copy()
         counters = state.counters.copy()
         vols = state.volumes.copy()
@@ -231,7 +268,7 @@ class PumpModel:
         rec_g = np.zeros((n, self.N))
         tab = self.tables
         if not self.restriction_mode:
-            y[self.N] = inputs.p_delivery
+            y[self.N] = K.log_density_of(inputs.p_delivery, self.params)
         theta, t = state.theta, state.t
         if n:
             if self.bearing is None:
@@ -245,8 +282,10 @@ class PumpModel:
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
             raise FloatingPointError("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
-        new = PumpState(t=t, theta=theta, pressures=y, eccentricity=e, counters=counters, volumes=vols,
-                        swept_angle=swept)
+        pres = np.empty_like(y)
+        K.to_pressures(y, self.params, pres)
+        new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
+                        volumes=vols, swept_angle=swept)
         return new, self._outputs(rec, rec_p, rec_g, inputs, vols - state.volumes, dt)
 
     def _integrate_external(self, y, e, theta, t, inputs, n, h, rec, rec_p, rec_g, counters, vols):
@@ -255,17 +294,19 @@ class PumpModel:
         omega2 = inputs.omega * (N - 1) / N
         coef = np.empty(9)
         gaps = np.empty(N)
+        pres = np.empty(N + 1)
         c = prm[K.P_C]
         for i in range(n):
             theta, t = K.integrate(y, e, theta, t, inputs.omega, inputs.p_suction, inputs.p_delivery, 1, h,
                                    tab.data, tab.period, tab.shift, prm, K.BEARING_EXTERNAL,
                                    rec[i:i + 1], rec_p[i:i + 1], rec_g[i:i + 1], counters, vols)
             kc = int(rec[i, K.R_KC])
-            f1 = K.outer_gear_load(y, theta, inputs.omega, e[0], e[1], kc, tab.data, tab.period, tab.shift, prm)
+            K.to_pressures(y, prm, pres)
+            f1 = K.outer_gear_load(pres, theta, inputs.omega, e[0], e[1], kc, tab.data, tab.period, tab.shift, prm)
             d1 = self.bearing.velocity(e.copy(), np.array(f1[:2]), omega2)
             px, py, _, kc2 = K.contact(tab.data, tab.period, tab.shift, N, prm[K.P_DELTA], theta,
                                        e[0] + h * d1[0], e[1] + h * d1[1], gaps, coef)
-            f2 = K.outer_gear_load(y, theta, inputs.omega, px, py, kc2, tab.data, tab.period, tab.shift, prm)
+            f2 = K.outer_gear_load(pres, theta, inputs.omega, px, py, kc2, tab.data, tab.period, tab.shift, prm)
             d2 = self.bearing.velocity(np.array([px, py]), np.array(f2[:2]), omega2)
             ex, ey = e + 0.5 * h * (d1 + d2)
             en = math.hypot(ex, ey)
@@ -289,4 +330,5 @@ class PumpModel:
             leak_suction_delivery=rec[:, K.R_QSD], leak_drain=rec[:, K.R_QDR],
             restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, [K.R_EX, K.R_EY]],
             load=rec[:, [K.R_FX, K.R_FY]], gaps=rec_g, inner_rotation=rec[:, K.R_GAMMA],
-            contact_lobe=rec[:, K.R_KC].astype(int), theoretical_flow=qth, volumetric_efficiency=eta)
+            contact_lobe=rec[:, K.R_KC].astype(int), theoretical_flow=qth, volumetric_efficiency=eta,
+            port_mass_in=float(dvol[6]), port_mass_out=float(dvol[7]))

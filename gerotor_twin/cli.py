@@ -1,0 +1,192 @@
+"""The ``gerotor-twin`` command.
+
+Subcommands: ``geometry``, ``simulate``, ``demo`` (and those registered by
+sub-packages, e.g. the bearing benchmark).  User errors print one line
+``error: <field> = <value> is invalid; allowed: <range>`` and exit with 2.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from .errors import InputError
+
+__all__ = ["main", "build_parser"]
+
+
+def _write_json(path, obj):
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text(json.dumps(obj, indent=2))
+    print(f"wrote {path}")
+
+
+def _progress(prefix):
+    def cb(n, change):
+        print(f"\r{prefix}: revolution {n}, settling {change:.1e}   ", end="", file=sys.stderr, flush=True)
+    return cb
+
+
+# ----------------------------------------------------------------- geometry
+def cmd_geometry(args) -> int:
+    from .config import load_config
+    from .geometry.tables import cached_tables
+
+    cfg = load_config(args.config)
+    g = cfg.gears
+    tab = cached_tables(g, cfg.suction_port, cfg.delivery_port, cfg.numerics.table_points)
+    vol = tab.data[0]
+    info = {
+        "chambers": g.chambers, "inner_teeth": g.chambers - 1,
+        "eccentricity_m": g.eccentricity, "lobe_centre_radius_m": g.lobe_centre_radius,
+        "lobe_radius_m": g.lobe_radius, "outer_root_radius_m": g.outer_root_radius,
+        "outer_radius_m": g.outer_radius, "inner_hole_radius_m": g.inner_hole_radius, "width_m": g.width,
+        "tooth_tip_clearance_m": g.tip_clearance,
+        "inner_tip_radius_m": g.inner_tip_radius, "inner_root_radius_m": g.inner_root_radius,
+        "displacement_m3_per_rev": g.displacement_closed_form(),
+        "min_chamber_volume_m3": float(vol.min()), "max_chamber_volume_m3": float(vol.max()),
+        "min_convex_curvature_radius_m": g.min_convex_curvature_radius(),
+        "suction_port_deg": [round(v, 4) for v in (cfg.suction_port.start * 57.29577951308232,
+                                                    cfg.suction_port.end * 57.29577951308232)],
+        "delivery_port_deg": [round(v, 4) for v in (cfg.delivery_port.start * 57.29577951308232,
+                                                     cfg.delivery_port.end * 57.29577951308232)],
+    }
+    print(f"Gerotor {g.chambers}/{g.chambers - 1} from {cfg.source}")
+    for k, v in info.items():
+        print(f"  {k:32s} {v}")
+    print(f"  displacement                     {info['displacement_m3_per_rev'] * 1e6:.3f} cm³/rev")
+    if args.json:
+        _write_json(args.json, info)
+    if args.plot:
+        from .model.plots import plot_geometry
+        plot_geometry(g, args.plot, ports=(cfg.suction_port, cfg.delivery_port))
+        print(f"wrote {args.plot}")
+    return 0
+
+
+# ----------------------------------------------------------------- simulate
+def cmd_simulate(args) -> int:
+    from .config import load_config
+    from .model.pump import PumpModel
+    from .model.steady import run_steady
+
+    cfg = load_config(args.config)
+    model = PumpModel(cfg, bearing=args.model)
+    t0 = time.perf_counter()
+    res = run_steady(model, args.rpm, args.bar, max_revolutions=args.revolutions,
+                     progress=_progress(f"{args.rpm:g} rpm {args.bar:g} bar"))
+    print(file=sys.stderr)
+    s = res.summary()
+    s["wall_time_s"] = time.perf_counter() - t0
+    print(f"{args.model} model, {args.rpm:g} rpm, {args.bar:g} bar gauge "
+          f"({s['revolutions']} revolutions to periodic state, {s['wall_time_s']:.2f} s)")
+    print(f"  theoretical flow        {s['theoretical_flow_m3s'] * 6e4:9.3f} L/min")
+    print(f"  mean delivery flow      {s['mean_delivery_flow_m3s'] * 6e4:9.3f} L/min")
+    print(f"  volumetric efficiency   {100 * s['volumetric_efficiency']:9.2f} %")
+    print(f"  delivery flow ripple    {100 * s['delivery_flow_ripple']:9.2f} %")
+    print(f"  chamber pressure        {(s['min_chamber_pressure_pa'] - 101325) / 1e5:9.3f} .. "
+          f"{(s['max_chamber_pressure_pa'] - 101325) / 1e5:.3f} bar gauge")
+    ex, ey = s["mean_eccentricity_m"]
+    print(f"  mean eccentricity       ({ex * 1e6:.2f}, {ey * 1e6:.2f}) µm")
+    print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm")
+    if args.json:
+        _write_json(args.json, s)
+    if args.plot:
+        from .model.plots import plot_steady
+        plot_steady(res, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+# --------------------------------------------------------------------- demo
+def cmd_demo(args) -> int:
+    """For now: the default pump at 1000/2000/3000 rpm × 5–27.5 bar, table and plots."""
+    from .config import load_config
+    from .model.plots import plot_efficiency_map, plot_geometry, plot_steady
+    from .model.pump import PumpModel
+    from .model.steady import run_steady
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg = load_config(args.config)
+    t0 = time.perf_counter()
+    print("building geometry tables (cached after the first run) ...", flush=True)
+    model = PumpModel(cfg, bearing=args.model)
+    print(f"  ready in {time.perf_counter() - t0:.1f} s; displacement "
+          f"{model.displacement * 1e6:.3f} cm³/rev, model '{args.model}'")
+    plot_geometry(cfg.gears, out / "geometry.png", ports=(cfg.suction_port, cfg.delivery_port))
+    speeds = (1000, 2000, 3000)
+    pressures = (5, 10, 15, 20, 25, 27.5)
+    points = []
+    print(f"\nvolumetric efficiency [%] ({args.model} outer-gear model)")
+    print("  rpm  " + "".join(f"{p:>8g} bar" for p in pressures))
+    for rpm in speeds:
+        row = []
+        for bar in pressures:
+            res = run_steady(model, rpm, bar)
+            s = res.summary()
+            points.append(s)
+            row.append(100 * s["volumetric_efficiency"])
+            if bar == 27.5:
+                plot_steady(res, out / f"steady_{rpm}rpm_{bar:g}bar.png")
+        print(f"  {rpm:5d}" + "".join(f"{v:12.2f}" for v in row), flush=True)
+    plot_efficiency_map(points, out / "efficiency.png")
+    _write_json(out / "efficiency.json", {"points": points})
+    print(f"\nplots: {out}/geometry.png, {out}/efficiency.png, {out}/steady_*rpm_27.5bar.png "
+          f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+# ------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gerotor-twin", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    g = sub.add_parser("geometry", help="gear set, chambers, displacement; picture")
+    g.add_argument("--config", help="pump YAML (default config/pump.yaml)")
+    g.add_argument("--json", help="write the geometry figures to this JSON file")
+    g.add_argument("--plot", help="write a picture of the gears and chambers (PNG)")
+    g.set_defaults(func=cmd_geometry)
+
+    s = sub.add_parser("simulate", help="run one operating point to periodic steady state")
+    s.add_argument("--rpm", type=float, required=True, help="shaft speed [rpm]")
+    s.add_argument("--bar", type=float, required=True, help="delivery pressure [bar gauge]")
+    s.add_argument("--revolutions", type=int, default=30, help="max revolutions to reach periodic state")
+    s.add_argument("--model", default="fixed", choices=("fixed", "mobility", "short", "fdm"),
+                   help="outer-gear model")
+    s.add_argument("--config", help="pump YAML (default config/pump.yaml)")
+    s.add_argument("--json", help="write the results to this JSON file")
+    s.add_argument("--plot", help="write chamber-1 pressure and delivery flow vs angle (PNG)")
+    s.set_defaults(func=cmd_simulate)
+
+    d = sub.add_parser("demo", help="the main job of `make demo`")
+    d.add_argument("--out", default="out/demo", help="output directory")
+    d.add_argument("--model", default="fixed", choices=("fixed", "mobility", "short", "fdm"))
+    d.add_argument("--config", help="pump YAML")
+    d.set_defaults(func=cmd_demo)
+
+    try:
+        from .bearing.cli_commands import register
+        register(sub)
+    except ImportError:
+        pass
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,353 @@
+"""Write an MCAP log from a background thread, so a ROS executor never waits on the disk.
+
+:class:`BackgroundMcapLog` wraps a :class:`~gerotor_twin.io.mcap_log.McapLog`
+or :class:`~gerotor_twin.io.mcap_log.RotatingMcapLog`.  ``write``/``write_raw``
+run in the caller's thread only as far as validation and CDR encoding (so a
+bad message raises there, and later changes to the caller's arrays cannot
+alter what is logged); the bytes then go to a bounded queue that one writer
+thread empties into the file.
+
+Queue full
+    The new message is **dropped**, never queued by evicting older ones and
+    never waited for longer than ``block_s`` (default 0: not at all).
+    ``write`` returns False, the drop is counted per topic
+    (:meth:`BackgroundMcapLog.stats`), logged (first drop, then at 10, 100,
+    ... drops) and written into the file at close as metadata record
+    :data:`STATS_METADATA`.
+After close
+    Writes return False and are counted as ``dropped_after_close``.
+Writer-thread I/O error
+    Logged once; the message and all later ones are counted as ``lost``;
+    :attr:`BackgroundMcapLog.error` holds the exception.
+close()
+    Stops accepting, lets the thread drain the queue, write the stats record
+    and finalise the file, and waits for that up to ``timeout_s``.  It takes
+    no lock that an interrupted producer could hold (the queue is a
+    lock-free ``deque`` polled every ``poll_s``), so it is safe from a signal
+    handler; it also runs at interpreter exit.  Idempotent.
+"""
+from __future__ import annotations
+
+import collections
+import itertools
+import logging
+import threading
+import time
+import weakref
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Union
+
+from gerotor_twin.errors import InputError
+from gerotor_twin.io.mcap_log import McapLog, RotatingMcapLog, _check_time
+from gerotor_twin.io.qos import QosSpec
+
+__all__ = ["STATS_METADATA", "LogStats", "BackgroundMcapLog"]
+
+#: Name of the Metadata record with the writer's counters, written at close.
+STATS_METADATA = "gerotor_twin.log_stats"
+
+_log = logging.getLogger(__name__)
+AnyLog = Union[McapLog, RotatingMcapLog]
+
+
+@dataclass(frozen=True)
+class LogStats:
+    """Counters of a :class:`BackgroundMcapLog` [messages].
+
+    Attributes
+    ----------
+    queued, written : int
+        Accepted into the queue; written to the file.
+    dropped_queue_full : dict[str, int]
+        Per topic, rejected because the queue was full.
+    dropped_after_close : int
+        Writes attempted after :meth:`BackgroundMcapLog.close`.
+    lost : int
+        Accepted but not written because of a writer-thread error.
+    max_queue_depth : int
+        Highest queue length seen.
+    error : str or None
+        Writer-thread error, if any.
+    """
+
+    queued: int
+    written: int
+    dropped_queue_full: dict[str, int] = field(default_factory=dict)
+    dropped_after_close: int = 0
+    lost: int = 0
+    max_queue_depth: int = 0
+    error: str | None = None
+
+    @property
+    def dropped(self) -> int:
+        """All messages offered but not written."""
+        return sum(self.dropped_queue_full.values()) + self.dropped_after_close + self.lost
+
+    def as_metadata(self) -> dict[str, str]:
+        """String form for an MCAP Metadata record."""
+        out = {"queued": str(self.queued), "written": str(self.written),
+               "dropped_queue_full": str(sum(self.dropped_queue_full.values())),
+               "dropped_after_close": str(self.dropped_after_close), "lost": str(self.lost),
+               "max_queue_depth": str(self.max_queue_depth)}
+        out.update({f"dropped_queue_full/{k}": str(v) for k, v in self.dropped_queue_full.items()})
+        if self.error:
+            out["error"] = self.error
+        return out
+
+
+class _Pump:
+    """State shared by the producer side and the writer thread (no reference to the wrapper)."""
+
+    def __init__(self, log: AnyLog, max_queue: int, poll_s: float, flush_interval_s: float | None):
+        self.log = log
+        self.queue: collections.deque[Any] = collections.deque()
+        self.max_queue = max_queue
+        self.poll_s = poll_s
+        self.flush_interval_s = flush_interval_s
+        self.accepting = True
+        self.stopping = False
+        self.error: BaseException | None = None
+        self.queued = itertools.count(1)    # next() is atomic in CPython
+        self.n_queued = 0
+        self.retracted = 0
+        self.written = 0
+        self.lost = 0
+        self.max_depth = 0
+        self.drop_lock = threading.Lock()   # producers only; close() never takes it
+        self.dropped: dict[str, int] = {}
+        self.dropped_after_close = 0
+        self.thread = threading.Thread(target=self.run, name="mcap-log-writer", daemon=True)
+
+    def stats(self) -> LogStats:
+        return LogStats(self.n_queued - self.retracted, self.written, dict(self.dropped),
+                        self.dropped_after_close, self.lost, self.max_depth,
+                        None if self.error is None else repr(self.error))
+
+    def _handle(self, item: Any) -> None:
+        kind, args = item
+        if kind == "flush":
+            try:
+                if self.error is None:
+                    self.log.flush()
+            except Exception as exc:
+                self.error = exc
+                _log.error("MCAP writer thread: %s; further messages are lost", exc)
+            if args is not None:
+                args.set()
+            return
+        if self.error is not None:
+            self.lost += kind == "msg"
+            return
+        try:
+            if kind == "msg":
+                topic, data, log_ns, pub_ns, seq = args
+                self.log.write_raw(topic, data, log_ns, pub_ns, sequence=seq)
+                self.written += 1
+            else:
+                self.log.add_metadata(*args)
+        except Exception as exc:  # keep the thread alive; report once
+            self.error = exc
+            self.lost += kind == "msg"
+            _log.error("MCAP writer thread: %s; further messages are lost", exc)
+
+    def run(self) -> None:
+        last_flush = time.monotonic()
+        while True:
+            try:
+                item = self.queue.popleft()
+            except IndexError:
+                if self.stopping:
+                    break
+                now = time.monotonic()
+                if (self.flush_interval_s is not None and self.error is None
+                        and now - last_flush >= self.flush_interval_s):
+                    self._handle(("flush", None))
+                    last_flush = now
+                time.sleep(self.poll_s)
+                continue
+            self._handle(item)
+        self._finish()
+
+    def _finish(self) -> None:
+        try:
+            if self.error is None:
+                self.log.add_metadata(STATS_METADATA, self.stats().as_metadata())
+        except Exception as exc:
+            self.error = self.error or exc
+        try:
+            self.log.close()
+        except Exception as exc:
+            self.error = self.error or exc
+            _log.error("MCAP log could not be finalised: %s", exc)
+
+    def stop(self, timeout_s: float | None) -> bool:
+        """Stop accepting, drain, finalise; True if the thread finished within ``timeout_s``."""
+        self.accepting = False
+        self.stopping = True
+        if self.thread is threading.current_thread():
+            return False
+        if self.thread.is_alive():
+            self.thread.join(timeout_s)
+        elif self.thread.ident is None:  # never started
+            self._finish()
+        return not self.thread.is_alive()
+
+
+class BackgroundMcapLog:
+    """Queue writes to a writer thread (bounded queue; drops are counted, never blocks for long).
+
+    Parameters
+    ----------
+    log : McapLog | RotatingMcapLog
+        The log to write; owned (closed) by this wrapper.
+    max_queue : int
+        Queue capacity [messages].
+    block_s : float
+        How long a producer may wait for room in a full queue before dropping [s].
+    flush_interval_s : float or None
+        Write the open chunk at least this often when idle [s] (limits loss on a crash).
+    poll_s : float
+        Writer-thread poll period when the queue is empty [s].
+    """
+
+    def __init__(self, log: AnyLog, *, max_queue: int = 10_000, block_s: float = 0.0,
+                 flush_interval_s: float | None = 5.0, poll_s: float = 0.01):
+        if isinstance(max_queue, bool) or not isinstance(max_queue, int) or max_queue < 1:
+            raise InputError("max_queue", max_queue, "an integer >= 1")
+        if not 0.0 <= block_s <= 10.0:
+            raise InputError("block_s", block_s, "[0, 10] s")
+        if flush_interval_s is not None and not flush_interval_s > 0:
+            raise InputError("flush_interval_s", flush_interval_s, "None or > 0 s")
+        if not 0.0 < poll_s <= 1.0:
+            raise InputError("poll_s", poll_s, "(0, 1] s")
+        self._log = log
+        self._block_s = float(block_s)
+        self._pump = _Pump(log, max_queue, poll_s, flush_interval_s)
+        self._pump.thread.start()
+        self._finalizer = weakref.finalize(self, self._pump.stop, 30.0)
+
+    # -- set-up (synchronous, before or between messages) ----------------------------------
+    def add_topic(self, topic: str, msgtype: str, qos: QosSpec = "reliable") -> int:
+        """Register a topic at once (see :meth:`McapLog.add_topic`)."""
+        return self._log.add_topic(topic, msgtype, qos)
+
+    def add_metadata(self, name: str, data: Mapping[str, str]) -> bool:
+        """Queue a Metadata record (not subject to the queue bound); False after close."""
+        if not isinstance(name, str) or not name or not isinstance(data, Mapping) or not all(
+                isinstance(k, str) and isinstance(v, str) for k, v in data.items()):
+            raise InputError(f"metadata[{name!r}]", data, "a name and a dict[str, str]")
+        if not self._pump.accepting:
+            return False
+        self._pump.queue.append(("meta", (name, dict(data))))
+        return True
+
+    # -- messages (any thread) --------------------------------------------------------------
+    def write(self, topic: str, msg: Any, log_time_ns: int, publish_time_ns: int | None = None) -> bool:
+        """Encode ``msg`` here and queue it; False if dropped (see module doc)."""
+        return self.write_raw(topic, self._log.encode(topic, msg), log_time_ns, publish_time_ns)
+
+    def write_raw(self, topic: str, data: bytes | bytearray | memoryview, log_time_ns: int,
+                  publish_time_ns: int | None = None, *, sequence: int | None = None) -> bool:
+        """Queue serialized bytes (copied); False if dropped.
+
+        Raises
+        ------
+        InputError
+            Unregistered topic or bad time stamps (checked here, not in the thread).
+        """
+        p = self._pump
+        if not p.accepting:
+            with p.drop_lock:
+                p.dropped_after_close += 1
+            return False
+        self._log.msgtype_of(topic)  # InputError naming the known topics if unregistered
+        log_ns = _check_time("log_time_ns", log_time_ns)
+        pub_ns = None if publish_time_ns is None else _check_time("publish_time_ns", publish_time_ns)
+        if len(p.queue) >= p.max_queue and not self._wait_for_room():
+            with p.drop_lock:
+                n = p.dropped[topic] = p.dropped.get(topic, 0) + 1
+                total = sum(p.dropped.values())
+            if str(total).rstrip("0") == "1":  # 1, 10, 100, ...
+                _log.warning("MCAP log queue full (%d): dropped %d message(s) so far (%s: %d)",
+                             p.max_queue, total, topic, n)
+            return False
+        item = ("msg", (topic, bytes(data), log_ns, pub_ns, sequence))
+        p.queue.append(item)
+        p.n_queued = next(p.queued)
+        if not p.accepting:  # closed meanwhile (other thread, or a signal handler in this one)
+            try:
+                p.queue.remove(item)
+            except (ValueError, IndexError, RuntimeError):
+                pass  # the writer thread took it: it is written
+            else:
+                with p.drop_lock:
+                    p.retracted += 1
+                    p.dropped_after_close += 1
+                return False
+        depth = len(p.queue)
+        if depth > p.max_depth:
+            p.max_depth = depth
+        return True
+
+    def _wait_for_room(self) -> bool:
+        p = self._pump
+        deadline = time.monotonic() + self._block_s
+        while time.monotonic() < deadline:
+            time.sleep(min(0.001, self._block_s))
+            if len(p.queue) < p.max_queue:
+                return True
+        return False
+
+    # -- lifetime -------------------------------------------------------------------------
+    def flush(self, timeout_s: float = 5.0) -> bool:
+        """Write everything queued so far and flush the file; True if done within ``timeout_s``."""
+        p = self._pump
+        if not p.accepting or not p.thread.is_alive():
+            return False
+        done = threading.Event()
+        p.queue.append(("flush", done))
+        return done.wait(timeout_s)
+
+    def close(self, timeout_s: float | None = 30.0) -> LogStats:
+        """Drain the queue, finalise the file, return the counters (idempotent, signal-safe).
+
+        Waits at most ``timeout_s`` [s] (None: until done); if the disk is that
+        slow the thread goes on and finishes the file by itself.
+        """
+        self._finalizer.detach()
+        if not self._pump.stop(timeout_s):
+            _log.error("MCAP log not finalised within %s s; the writer thread goes on", timeout_s)
+        return self._pump.stats()
+
+    def __enter__(self) -> "BackgroundMcapLog":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- introspection --------------------------------------------------------------------
+    def stats(self) -> LogStats:
+        """Current counters (see :class:`LogStats`)."""
+        return self._pump.stats()
+
+    @property
+    def error(self) -> BaseException | None:
+        """The writer-thread error, if one happened."""
+        return self._pump.error
+
+    @property
+    def queue_depth(self) -> int:
+        return len(self._pump.queue)
+
+    @property
+    def closed(self) -> bool:
+        return not self._pump.accepting
+
+    @property
+    def log(self) -> AnyLog:
+        """The wrapped log (read its ``path``/``paths``; write only through this wrapper)."""
+        return self._log
+
+    @property
+    def topics(self) -> dict[str, str]:
+        return self._log.topics

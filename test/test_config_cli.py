@@ -1,0 +1,93 @@
+"""Config validation and CLI behaviour (bad input gives one clear line, exit 2, no traceback)."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from gerotor_twin.config import default_config_path, load_config, parse_config
+from gerotor_twin.errors import InputError
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def raw():
+    return yaml.safe_load(default_config_path().read_text())
+
+
+@pytest.mark.parametrize("mutate,field", [
+    (lambda r: r["gears"].update(width_m=-1.0), "gears.width_m"),
+    (lambda r: r["gears"].update(lobe_radius_m=17.5e-3), "gears.lobe_radius_m"),
+    (lambda r: r["gears"].update(colour="red"), "gears.colour"),
+    (lambda r: r.update(extra={}), "extra"),
+    (lambda r: r["fluid"].update(viscosity_pa_s=float("nan")), "fluid.viscosity_pa_s"),
+    (lambda r: r["clearances"].update(housing_radial_m=0.0), "clearances.housing_radial_m"),
+    (lambda r: r["boundary"].update(mode="magic"), "boundary.mode"),
+    (lambda r: r["ports"]["delivery"].update(end_deg=200.0), "ports.delivery.start_deg"),
+    (lambda r: r["gears"].pop("width_m"), "gears.width_m"),
+])
+def test_bad_config_names_field(mutate, field):
+    r = raw()
+    mutate(r)
+    with pytest.raises(InputError) as ei:
+        parse_config(r)
+    assert ei.value.field == field
+    assert "allowed" in str(ei.value)
+
+
+def test_default_config_loads():
+    c = load_config()
+    assert c.gears.chambers == 7 and c.boundary.mode == "imposed"
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "gerotor_twin", *args], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300)
+
+
+def test_cli_geometry_json(tmp_path):
+    p = run_cli("geometry", "--json", str(tmp_path / "g.json"), "--plot", str(tmp_path / "g.png"))
+    assert p.returncode == 0, p.stderr
+    d = json.loads((tmp_path / "g.json").read_text())
+    for k in ("chambers", "eccentricity_m", "lobe_centre_radius_m", "lobe_radius_m", "width_m",
+              "displacement_m3_per_rev", "min_chamber_volume_m3", "max_chamber_volume_m3"):
+        assert k in d
+    assert (tmp_path / "g.png").stat().st_size > 10000
+
+
+def test_cli_simulate_json(tmp_path):
+    p = run_cli("simulate", "--rpm", "2000", "--bar", "10", "--json", str(tmp_path / "s.json"),
+                "--plot", str(tmp_path / "s.png"))
+    assert p.returncode == 0, p.stderr
+    d = json.loads((tmp_path / "s.json").read_text())
+    for k in ("theoretical_flow_m3s", "mean_delivery_flow_m3s", "volumetric_efficiency", "delivery_flow_ripple",
+              "min_chamber_pressure_pa", "max_chamber_pressure_pa"):
+        assert k in d
+    assert 0 < d["volumetric_efficiency"] < 1
+
+
+@pytest.mark.parametrize("args,needle", [
+    (("simulate", "--rpm", "5000", "--bar", "10"), "--rpm = 5000.0 is invalid; allowed: (0, 3000] rpm"),
+    (("simulate", "--rpm", "1000", "--bar", "40"), "--bar = 40.0 is invalid"),
+    (("simulate", "--rpm", "nan", "--bar", "10"), "--rpm"),
+    (("geometry", "--config", "/nonexistent.yaml"), "file not found"),
+])
+def test_cli_user_errors_are_one_line(args, needle):
+    p = run_cli(*args)
+    assert p.returncode == 2
+    assert needle in p.stderr
+    assert "Traceback" not in p.stderr
+
+
+def test_core_never_imports_rclpy():
+    bad = []
+    for f in (ROOT / "gerotor_twin").rglob("*.py"):
+        if "ros" in f.relative_to(ROOT / "gerotor_twin").parts[:1]:
+            continue
+        for line in f.read_text().splitlines():
+            s = line.strip()
+            if s.startswith(("import rclpy", "from rclpy")):
+                bad.append(str(f))
+    assert not bad
