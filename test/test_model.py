@@ -113,3 +113,14 @@ def test_bad_inputs_name_the_field(fixed_model, inp, field):
     with pytest.raises(InputError) as ei:
         fixed_model.initial_state(inp)
     assert ei.value.field == field
+
+
+def test_outputs_at_requested_times(fixed_model):
+    m = fixed_model
+    inp = Inputs(1500 * math.pi / 30, 101325.0, 101325.0 + 10e5)
+    s, o = m.advance(m.initial_state(inp), 0.01, inp)
+    got = o.at([o.t[3], 0.5 * (o.t[10] + o.t[11])])
+    assert got["chamber_pressures"][0] == pytest.approx(o.chamber_pressures[3])
+    assert got["delivery_flow"][1] == pytest.approx(0.5 * (o.delivery_flow[10] + o.delivery_flow[11]))
+    with pytest.raises(InputError):
+        o.at([1.0])

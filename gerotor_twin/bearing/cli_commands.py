@@ -21,7 +21,7 @@ from gerotor_twin.bearing.reynolds_fd import parse_grid
 from gerotor_twin.bearing.simulate import settle
 from gerotor_twin.errors import InputError, check_range
 
-__all__ = ["register", "cmd_bearing_steady", "cmd_bearing_benchmark"]
+__all__ = ["register", "cmd_bearing_steady", "cmd_bearing_benchmark", "main"]
 
 STEADY_METHODS = ("mobility", "short", "fdm")
 
@@ -167,3 +167,22 @@ def cmd_bearing_benchmark(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, summary)
     return 0
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry (``python -m gerotor_twin.bearing.cli_commands ...``) until the
+    subcommands are wired into ``gerotor-twin``; prints InputError without a traceback."""
+    import sys
+
+    parser = argparse.ArgumentParser(prog="python -m gerotor_twin.bearing.cli_commands")
+    register(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

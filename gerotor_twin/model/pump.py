@@ -96,6 +96,26 @@ class Outputs:
     def __len__(self) -> int:
         return self.t.size
 
+    def at(self, times) -> dict:
+        """Outputs at requested times [s] (linear interpolation between steps).
+
+        Returns a dict of arrays keyed like the fields (per-chamber fields get
+        shape (len(times), N)).  Times outside the call's span are an error.
+        """
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        if self.t.size == 0 or t.min() < self.t[0] - 1e-12 or t.max() > self.t[-1] + 1e-12:
+            raise InputError("times", [float(t.min()), float(t.max())],
+                             f"[{self.t[0] if self.t.size else 0:g}, {self.t[-1] if self.t.size else 0:g}] s")
+        out = {}
+        for name in ("theta", "delivery_pressure", "delivery_flow", "suction_flow", "leak_suction_delivery",
+                     "leak_drain", "restriction_flow", "inner_rotation"):
+            out[name] = np.interp(t, self.t, getattr(self, name))
+        for name in ("chamber_pressures", "eccentricity", "load", "gaps"):
+            v = getattr(self, name)
+            out[name] = np.column_stack([np.interp(t, self.t, v[:, k]) for k in range(v.shape[1])])
+        out["t"] = t
+        return out
+
 
 def _eos_args(f) -> tuple:
     """(β*, ratio, p_atm, band, p_vap): the argument order of the fluid kernels."""
