@@ -29,27 +29,27 @@ def plot_geometry(g: GerotorGeometry, path, theta: float = 0.35, ports=None):
     u = np.linspace(0, 2 * math.pi, 3000)
     x, y = g.inner_profile(u)
     c, s = math.cos(theta), math.sin(theta)
-    ax.fill(c * x - s * y, s * x + c * y, color="#9db4d6", label=f"inner gear ({N - 1} teeth)")
-    ax.add_patch(plt.Circle((0, 0), g.inner_hole_radius, color="white"))
     O2 = g.outer_centre
     ax.add_patch(plt.Circle(O2, g.outer_radius, color="#d9c29d", label=f"outer gear ({N} lobes)"))
     ax.add_patch(plt.Circle(O2, g.outer_root_radius, color="white"))
+    ax.fill(c * x - s * y, s * x + c * y, color="#9db4d6", label=f"inner gear ({N - 1} teeth)", zorder=3)
+    ax.add_patch(plt.Circle((0, 0), g.inner_hole_radius, color="white", zorder=4))
     for k, C in enumerate(g.lobe_centres(theta)):
         ax.add_patch(plt.Circle(C, g.lobe_radius, color="#d9c29d"))
     cmap = plt.get_cmap("tab10")
     for j in range(N):
         poly = chamber_polygon(g, theta, j)
-        ax.fill(poly[:, 0], poly[:, 1], color=cmap(j % 10), alpha=0.45)
+        ax.fill(poly[:, 0], poly[:, 1], color=cmap(j % 10), alpha=0.45, zorder=5)
         m = poly.mean(axis=0)
-        ax.text(m[0], m[1], str(j + 1), ha="center", va="center", fontsize=9)
+        ax.text(m[0], m[1], str(j + 1), ha="center", va="center", fontsize=9, zorder=6)
     X, _ = contact_points(g, theta)
-    ax.plot(X[:, 0], X[:, 1], "k.", ms=4, label="sealing points")
+    ax.plot(X[:, 0], X[:, 1], "k.", ms=4, label="sealing points", zorder=7)
     if ports:
         rr = g.outer_root_radius + g.eccentricity + 2e-3
         for port, col in zip(ports, ("tab:blue", "tab:red")):
             a = np.linspace(port.start, port.end, 100)
             ax.plot(rr * np.cos(a), rr * np.sin(a), color=col, lw=3, label=f"{port.name} port")
-    ax.plot(*g.pitch_point, "k+", ms=10, label="pitch point")
+    ax.plot(*g.pitch_point, "k+", ms=10, label="pitch point", zorder=7)
     lim = g.outer_radius * 1.15
     ax.set_xlim(-lim + g.eccentricity, lim + g.eccentricity)
     ax.set_ylim(-lim, lim)
