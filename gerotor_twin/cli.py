@@ -139,6 +139,19 @@ def cmd_demo(args) -> int:
     return 0
 
 
+# -------------------------------------------------------------------- bench
+def cmd_bench(args) -> int:
+    from .config import load_config
+    from .model.bench import realtime
+
+    cfg = load_config(args.config)
+    if args.what == "realtime":
+        rows = realtime(cfg, models=tuple(args.models.split(",")), seconds=args.seconds, repeats=args.repeats)
+        if args.json:
+            _write_json(args.json, {"realtime": rows})
+    return 0
+
+
 # ------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gerotor-twin", description=__doc__.splitlines()[0])
@@ -166,6 +179,15 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--model", default="fixed", choices=("fixed", "mobility", "short", "fdm"))
     d.add_argument("--config", help="pump YAML")
     d.set_defaults(func=cmd_demo)
+
+    b = sub.add_parser("bench", help="benchmarks (printed figures)")
+    b.add_argument("what", choices=("realtime",), help="realtime: model real-time factor at 1000/2000/3000 rpm")
+    b.add_argument("--models", default="fixed,mobility", help="comma-separated outer-gear models")
+    b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")
+    b.add_argument("--repeats", type=int, default=3)
+    b.add_argument("--config", help="pump YAML")
+    b.add_argument("--json", help="write the figures to this JSON file")
+    b.set_defaults(func=cmd_bench)
 
     try:
         from .bearing.cli_commands import register

@@ -91,3 +91,11 @@ def test_core_never_imports_rclpy():
             if s.startswith(("import rclpy", "from rclpy")):
                 bad.append(str(f))
     assert not bad
+
+
+def test_cli_bench_realtime_runs(tmp_path):
+    p = run_cli("bench", "realtime", "--models", "fixed", "--seconds", "0.01", "--repeats", "1",
+                "--json", str(tmp_path / "b.json"))
+    assert p.returncode == 0, p.stderr
+    rows = json.loads((tmp_path / "b.json").read_text())["realtime"]
+    assert [r["rpm"] for r in rows] == [1000, 2000, 3000] and all(r["real_time_factor"] > 0 for r in rows)
