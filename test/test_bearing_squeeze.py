@@ -63,7 +63,8 @@ def test_squeeze_approach_time(method, rtol):
     eps = traj.eccentricity_ratio
     k = int(np.searchsorted(eps, 0.5))
     # linear interpolation of the crossing time
-    t_cross = traj.t[k - 1] + (0.5 - eps[k - 1]) / (eps[k] - eps[k - 1]) * (traj.t[k] - traj.t[k - 1])
+    frac = (0.5 - eps[k - 1]) / (eps[k] - eps[k - 1])
+    t_cross = traj.t[k - 1] + frac * (traj.t[k] - traj.t[k - 1])
     assert t_cross == pytest.approx(t_ref, rel=rtol)
     assert np.all(np.abs(traj.e[:, 0]) < 1e-12 * C)  # straight down the load line
 

@@ -23,8 +23,8 @@ import contextlib
 import io
 import math
 import os
-import sys
 import statistics
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -32,7 +32,7 @@ import numpy as np
 
 from gerotor_twin.bearing.base import make_bearing
 from gerotor_twin.bearing.geometry import TABLE1, BearingGeometry
-from gerotor_twin.bearing.simulate import BearingTrajectory, simulate
+from gerotor_twin.bearing.simulate import simulate
 from gerotor_twin.errors import InputError, check_range
 
 __all__ = ["benchmark_load", "run_benchmark", "BenchmarkResult", "MethodTiming", "format_table",

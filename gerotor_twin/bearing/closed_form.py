@@ -61,7 +61,8 @@ def _load_scale(geometry: BearingGeometry, omega: float) -> float:
     return g.viscosity_pa_s * abs(omega) * g.radius_m * g.length_m ** 3 / g.clearance_m ** 2
 
 
-def ocvirk_load_components(eps: float, geometry: BearingGeometry, omega: float) -> tuple[float, float]:
+def ocvirk_load_components(eps: float, geometry: BearingGeometry,
+                           omega: float) -> tuple[float, float]:
     """Steady short-bearing film force along and across the line of centres.
 
     .. math::
@@ -231,7 +232,8 @@ def pi_film_integrals(eps: float, a: float, b: float) -> np.ndarray:
     .. math::
 
         J^{cc} = \\int_a^b\\frac{\\cos^2\\alpha\\,d\\alpha}{(1-\\varepsilon\\cos\\alpha)^3},\\quad
-        J^{sc} = \\int_a^b\\frac{\\sin\\alpha\\cos\\alpha\\,d\\alpha}{(1-\\varepsilon\\cos\\alpha)^3},\\quad
+        J^{sc} = \\int_a^b\\frac{\\sin\\alpha\\cos\\alpha\\,d\\alpha}
+                        {(1-\\varepsilon\\cos\\alpha)^3},\\quad
         J^{ss} = \\int_a^b\\frac{\\sin^2\\alpha\\,d\\alpha}{(1-\\varepsilon\\cos\\alpha)^3}
 
     evaluated with the Sommerfeld substitution, which turns each integrand

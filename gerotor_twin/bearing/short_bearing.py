@@ -23,8 +23,8 @@ The motion equation (6), ``F_film(e, e_dot) + F_est = 0``, is solved for
 ``e_dot`` by Newton's method.  Inside the positive region the force is linear
 in ``v``, ``F = -A(v_dir) v``, and the derivative of the region boundary adds
 nothing (the pressure is zero there), so the exact Jacobian is ``-A``; the
-iteration starts from the mobility-method velocity and converges in 2-5
-steps.
+iteration starts from the mobility-method velocity and converges in 1-4
+steps (typically 3).
 
 References
 ----------
@@ -85,7 +85,8 @@ def pressure(theta, z, eps, phi, eps_dot, phi_dot, omega, geometry: BearingGeome
     z = np.asarray(z, dtype=float)
     bracket = ((omega - 2.0 * phi_dot) * eps * np.sin(a) - 2.0 * eps_dot * np.cos(a)) \
         / (1.0 - eps * np.cos(a)) ** 3
-    return 3.0 * g.viscosity_pa_s / g.clearance_m ** 2 * bracket * (z ** 2 - g.length_m ** 2 / 4.0)  # Eq. (4)
+    # Eq. (4)
+    return 3.0 * g.viscosity_pa_s / g.clearance_m ** 2 * bracket * (z ** 2 - g.length_m ** 2 / 4.0)
 
 
 @njit
