@@ -170,8 +170,7 @@ class PumpModel:
         self.bearing = None
         if bearing in ("short", "fdm"):
             self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
-        self.displacement = g.displacement_closed_form() if g.tip_clearance == 0 else \
-            replace(g, tip_clearance=0.0).displacement_closed_form()
+        self.displacement = g.displacement_closed_form()   # ideal profiles; δ does not enter
         self.params = self._kernel_params()
 
     # ------------------------------------------------------------ parameters
