@@ -194,6 +194,8 @@ def build_parser() -> argparse.ArgumentParser:
         register(sub)
     except ImportError:
         pass
+    from .report.cli_commands import register as register_offline   # synth-bench, report, run-bag, replay
+    register_offline(sub)
     return p
 
 

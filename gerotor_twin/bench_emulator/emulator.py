@@ -1,0 +1,223 @@
+"""The bench emulator: a pump that differs from the twin on purpose, seen through bench sensors.
+
+The emulated pump is :class:`~gerotor_twin.model.pump.PumpModel` with
+
+* another outer-gear model (``BenchSpec.bearing``, default the short-bearing
+  "Method 1"; the twin defaults to the mobility method),
+* tooth-tip and lateral clearances ``BenchSpec.clearance_factor`` × nominal
+  (default +10 %, so about +33 % leakage),
+
+driven by a motor and a pressure valve that follow the profile's set-points
+with first-order lags.  Every internal tick (1 kHz) advances the model with
+the inputs held, then the sensors see the result: an encoder (quantized,
+differenced over 10 ms), fast pressure transducers that see the flow ripple
+through the delivery-line impedance, a flow meter with its own time
+constant, a slow thermometer, Gaussian noise on each, and a recorder
+latency.  Output: an MCAP file with the bench topics of DESIGN.md, rosbag2
+conventions (via :mod:`gerotor_twin.io`), identical bytes for the same seed,
+profile and software versions.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import IO, Callable
+
+import numpy as np
+import yaml
+
+from gerotor_twin.config import PumpConfig, load_config, parse_config
+from gerotor_twin.errors import InputError
+from gerotor_twin.io import McapLog
+from gerotor_twin.io import messages as m
+from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
+
+from .profiles import Profile
+from .sensors import BenchSpec, Encoder, FirstOrderLag, noise_streams
+
+__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "synthesize"]
+
+#: Topics and types written (DESIGN.md, bench inputs of the twin).
+BENCH_TOPICS = {
+    "/bench/shaft_speed": m.JOINT_STATE,
+    "/bench/delivery_pressure": m.FLUID_PRESSURE,
+    "/bench/suction_pressure": m.FLUID_PRESSURE,
+    "/bench/delivery_flow": m.FLOAT64,
+    "/bench/oil_temperature": m.TEMPERATURE,
+}
+#: Metadata record describing how a file was synthesized.
+EMULATOR_METADATA = "gerotor_twin.bench_emulator"
+SHAFT_JOINT = "pump_shaft"
+
+
+def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
+    """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-]."""
+    if not (math.isfinite(factor) and 0.5 <= factor <= 2.0):
+        raise InputError("clearance_factor", factor, "[0.5, 2]")
+    raw = config.to_dict()
+    raw["clearances"]["tooth_tip_m"] *= factor
+    raw["clearances"]["lateral_m"] *= factor
+    return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
+
+
+def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Callable[[float], None]:
+    wall0 = time.monotonic()
+    last = [-1.0]
+
+    def show(t: float, done: bool = False) -> None:
+        if stream is None:
+            return
+        now = time.monotonic()
+        if not done and (now - last[0] < 1.0 or t <= 0):
+            return
+        last[0] = now
+        el = now - wall0
+        eta = el * (total_s - t) / t if t > 0 else float("nan")
+        print(f"\r{label}: {t:7.1f}/{total_s:.1f} s simulated, {el:6.0f} s elapsed, ETA {eta:5.0f} s ",
+              end="\n" if done else "", file=stream, flush=True)
+    return show
+
+
+def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, config: PumpConfig | None = None,
+               overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr) -> dict:
+    """Run the emulated bench along ``profile`` and record it to MCAP.
+
+    Parameters
+    ----------
+    profile : Profile
+        Set-points of speed and delivery pressure.
+    output : path or binary stream
+        MCAP file to create (or a stream such as ``io.BytesIO``).
+    spec : BenchSpec
+        Emulator and sensor parameters, including the seed.
+    config : PumpConfig, optional
+        Nominal pump (default ``config/pump.yaml``); the emulated pump derives from it.
+    overwrite : bool
+        Replace an existing file.
+    command : str
+        The command line, stored in the file's metadata.
+    progress : text stream or None
+        Where to print progress (default stderr).
+
+    Returns
+    -------
+    dict
+        Message counts, duration [s] and the ground truth per plateau (true mean delivery
+        flow [m³/s], theoretical flow [m³/s], volumetric efficiency [-]).
+    """
+    if spec.bearing not in BEARING_MODELS:
+        raise InputError("bearing", spec.bearing, " | ".join(BEARING_MODELS))
+    nominal = config or load_config()
+    cfg = emulated_config(nominal, spec.clearance_factor)
+    model = PumpModel(cfg, spec.bearing)
+    dt = 1.0 / spec.internal_rate_hz
+    dec = {"speed": spec.decimation(spec.speed_rate_hz, "speed_rate_hz"),
+           "pressure": spec.decimation(spec.pressure_rate_hz, "pressure_rate_hz"),
+           "flow": spec.decimation(spec.flow_rate_hz, "flow_rate_hz"),
+           "temperature": spec.decimation(spec.temperature_rate_hz, "temperature_rate_hz")}
+    n_ticks = int(round(profile.duration_s * spec.internal_rate_hz))
+    t_grid = np.arange(n_ticks + 1) * dt
+    sp_w, sp_p = profile.setpoints(t_grid)
+    p_atm = cfg.fluid.atmospheric_pa
+    w_max = cfg.range.max_speed_rpm * math.pi / 30
+    rng = noise_streams(spec.seed, ("speed", "pressure", "suction", "flow", "temperature", "latency"))
+
+    def suction(w: float) -> float:
+        return p_atm - spec.suction_drop_pa * (w / w_max) ** 2
+
+    # ---- run-in at the first set-point (not recorded)
+    inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]))
+    state = model.initial_state(inp, t=-spec.warmup_s)
+    state, out = model.advance(state, spec.warmup_s, inp)
+    q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
+    motor = FirstOrderLag(spec.motor_tau_s, dt, sp_w[0])
+    valve = FirstOrderLag(spec.valve_tau_s, dt, sp_p[0])
+    ripple_dc = FirstOrderLag(spec.ripple_dc_tau_s, dt, q_dc0)
+    p_sensor = FirstOrderLag(spec.pressure_tau_s, dt, p_atm + sp_p[0])
+    s_sensor = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_suction)
+    flow_meter = FirstOrderLag(spec.flow_tau_s, dt, q_dc0)
+    thermo = FirstOrderLag(spec.temperature_tau_s, dt, spec.temperature_start_c)
+    encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))), dt,
+                      state.theta, inp.omega)
+
+    meta = {EMULATOR_METADATA: {
+        "synthetic": "true", "profile": profile.name, "profile_description": profile.description,
+        "segments": json.dumps([s.__dict__ for s in profile.segments]),
+        "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
+        "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}}
+    log = McapLog(output, metadata=meta, overwrite=overwrite)
+    for topic, msgtype in BENCH_TOPICS.items():
+        log.add_topic(topic, msgtype, qos="sensor")
+    show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
+    true_q = np.empty(n_ticks)
+    true_w = np.empty(n_ticks)
+    t0_ns = spec.start_time_ns
+
+    def emit(topic: str, msg: dict, t_ns: int) -> None:
+        lat = spec.latency_s + rng["latency"].exponential(spec.latency_jitter_s)
+        log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
+
+    try:
+        for k in range(n_ticks):
+            w = max(0.0, motor(sp_w[k]))
+            pd = p_atm + valve(sp_p[k])
+            ps = suction(w)
+            state, out = model.advance(state, dt, Inputs(w, ps, pd))
+            q_inst = float(out.delivery_flow[-1])
+            q_mean = float(np.mean(out.delivery_flow))
+            true_q[k], true_w[k] = q_mean, w
+            t = (k + 1) * dt
+            t_ns = t0_ns + int(round(t * 1e9))
+            p_meas = p_sensor(pd + spec.ripple_impedance * (q_inst - ripple_dc(q_mean)))
+            s_meas = s_sensor(ps - 0.1 * spec.ripple_impedance * (q_inst - ripple_dc.y))
+            q_meas = flow_meter(q_mean)
+            temp = thermo(spec.temperature_start_c + spec.temperature_rise_c * t / profile.duration_s)
+            w_meas, angle = encoder(state.theta)
+            i = k + 1
+            if i % dec["speed"] == 0:
+                emit("/bench/shaft_speed", m.joint_state(t_ns, name=[SHAFT_JOINT], position=[angle],
+                                                         velocity=[w_meas]), t_ns)
+            if i % dec["pressure"] == 0:
+                emit("/bench/delivery_pressure", m.fluid_pressure(
+                    t_ns, p_meas + rng["pressure"].normal(0.0, spec.pressure_noise_pa),
+                    variance=spec.pressure_noise_pa ** 2), t_ns)
+                emit("/bench/suction_pressure", m.fluid_pressure(
+                    t_ns, s_meas + rng["suction"].normal(0.0, spec.suction_noise_pa),
+                    variance=spec.suction_noise_pa ** 2), t_ns)
+            if i % dec["flow"] == 0:
+                sigma = math.hypot(spec.flow_noise_rel * q_meas, spec.flow_noise_m3s)
+                emit("/bench/delivery_flow", m.float64(q_meas + rng["flow"].normal(0.0, sigma)), t_ns)
+            if i % dec["temperature"] == 0:
+                emit("/bench/oil_temperature", m.temperature(
+                    t_ns, temp + rng["temperature"].normal(0.0, spec.temperature_noise_c),
+                    variance=spec.temperature_noise_c ** 2), t_ns)
+            show(t)
+    finally:
+        counts = log.message_counts
+        log.close()
+    show(profile.duration_s, done=True)
+    return {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed,
+            "message_counts": counts, "truth": _truth(profile, cfg, model, true_q, true_w, dt)}
+
+
+def _truth(profile: Profile, cfg: PumpConfig, model: PumpModel, q: np.ndarray, w: np.ndarray,
+           dt: float) -> list[dict]:
+    """Ground truth on the second half of each plateau: mean flows and efficiency."""
+    rows = []
+    for t0, t1, rpm, bar in profile.plateaus():
+        a, b = int(round((t0 + t1) / 2 / dt)), int(round(t1 / dt))
+        if b <= a:
+            continue
+        qm = float(q[a:b].mean())
+        qth = float(model.displacement * w[a:b].mean() / (2 * math.pi))
+        rows.append({"t0_s": t0, "t1_s": t1, "rpm": rpm, "bar": bar, "true_mean_flow_m3s": qm,
+                     "theoretical_flow_m3s": qth, "true_volumetric_efficiency": qm / qth if qth > 0 else None})
+    return rows
+
+
+def default_output_name(profile: Profile, directory: str | Path = "bags") -> Path:
+    """``bags/bench_<profile>.mcap``."""
+    return Path(directory) / f"bench_{profile.name}.mcap"

@@ -1,0 +1,162 @@
+"""Sensor and actuator models of the emulated bench (all SI, discrete time, deterministic).
+
+Every element is updated once per internal tick ``dt`` [s]; noise comes from
+a :class:`numpy.random.Generator` the caller seeds, so a run is repeatable
+bit for bit.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["FirstOrderLag", "Encoder", "BenchSpec", "noise_streams"]
+
+
+@dataclass(frozen=True)
+class BenchSpec:
+    """Everything that makes the emulated bench differ from the twin (SI units).
+
+    Attributes
+    ----------
+    seed : int
+        Seed of every noise source (numpy ``SeedSequence``).
+    bearing : str
+        Outer-gear model of the emulated pump ("short" = Method 1; the twin defaults to "mobility").
+    clearance_factor : float
+        Tooth-tip and lateral clearances of the emulated pump relative to ``config/pump.yaml`` [-].
+    internal_rate_hz : float
+        Tick rate of the emulator: model slices, sensor filters [Hz].
+    speed_rate_hz, pressure_rate_hz, flow_rate_hz, temperature_rate_hz : float
+        Publish rates of the bench topics [Hz] (divisors of ``internal_rate_hz``).
+    motor_tau_s, valve_tau_s : float
+        First-order response of the drive speed and of the delivery pressure valve to set-points [s].
+    encoder_counts : int
+        Shaft encoder counts per revolution (quadrature edges) [-].
+    speed_window_s : float
+        Encoder differencing window of the speed measurement [s].
+    pressure_tau_s : float
+        Pressure transducer time constant [s].
+    pressure_noise_pa, suction_noise_pa : float
+        Standard deviation of transducer noise [Pa].
+    ripple_impedance : float
+        Delivery-line impedance turning flow ripple into pressure ripple [Pa·s/m³].
+    ripple_dc_tau_s : float
+        Time constant separating the ripple from the mean flow [s].
+    suction_drop_pa : float
+        Suction-line pressure drop at 3000 rpm (∝ speed²) [Pa].
+    flow_tau_s : float
+        Flow-meter time constant [s].
+    flow_noise_rel, flow_noise_m3s : float
+        Flow-meter noise: relative to the reading [-] and absolute [m³/s] (standard deviations).
+    temperature_start_c, temperature_rise_c : float
+        Oil temperature at the start and its linear rise over the run [°C].
+    temperature_tau_s, temperature_noise_c : float
+        Thermometer time constant [s] and noise [K].
+    latency_s, latency_jitter_s : float
+        Receive latency of the recorder (log time − stamp): fixed part and mean of an exponential [s].
+    warmup_s : float
+        Simulated run-in at the first set-point before recording starts [s].
+    start_time_ns : int
+        Time stamp of the first sample [ns since the epoch] (fixed, so files are regenerable).
+    """
+    seed: int = 20240601
+    bearing: str = "short"
+    clearance_factor: float = 1.10
+    internal_rate_hz: float = 1000.0
+    speed_rate_hz: float = 100.0
+    pressure_rate_hz: float = 100.0
+    flow_rate_hz: float = 20.0
+    temperature_rate_hz: float = 5.0
+    motor_tau_s: float = 0.15
+    valve_tau_s: float = 0.08
+    encoder_counts: int = 16384
+    speed_window_s: float = 0.01
+    pressure_tau_s: float = 0.5e-3
+    pressure_noise_pa: float = 2000.0
+    suction_noise_pa: float = 300.0
+    ripple_impedance: float = 1.0e8
+    ripple_dc_tau_s: float = 0.02
+    suction_drop_pa: float = 5000.0
+    flow_tau_s: float = 0.2
+    flow_noise_rel: float = 0.003
+    flow_noise_m3s: float = 1.0e-6
+    temperature_start_c: float = 40.0
+    temperature_rise_c: float = 2.0
+    temperature_tau_s: float = 3.0
+    temperature_noise_c: float = 0.05
+    latency_s: float = 0.3e-3
+    latency_jitter_s: float = 0.2e-3
+    warmup_s: float = 0.3
+    start_time_ns: int = 1_735_689_600_000_000_000   # 2025-01-01T00:00:00Z
+
+    def decimation(self, rate_hz: float, field: str) -> int:
+        """Ticks per published sample for a topic rate [Hz]; InputError if not a divisor."""
+        from gerotor_twin.errors import InputError
+        n = self.internal_rate_hz / rate_hz
+        if not (rate_hz > 0 and abs(n - round(n)) < 1e-9 and round(n) >= 1):
+            raise InputError(field, rate_hz, f"a divisor of the internal rate {self.internal_rate_hz:g} Hz")
+        return int(round(n))
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+class FirstOrderLag:
+    """y' = (u − y)/τ, exact for input held over each tick.
+
+    Parameters
+    ----------
+    tau_s : float
+        Time constant [s] (0: no lag).
+    dt_s : float
+        Tick [s].
+    y0 : float
+        Initial output (units of the signal).
+    """
+
+    def __init__(self, tau_s: float, dt_s: float, y0: float):
+        self.a = 1.0 - math.exp(-dt_s / tau_s) if tau_s > 0 else 1.0
+        self.y = float(y0)
+
+    def __call__(self, u: float) -> float:
+        self.y += self.a * (u - self.y)
+        return self.y
+
+
+class Encoder:
+    """Shaft speed from a quadrature encoder: count difference over a window.
+
+    Parameters
+    ----------
+    counts : int
+        Counts per revolution [-].
+    window_ticks : int
+        Differencing window in ticks [-].
+    dt_s : float
+        Tick [s].
+    theta0 : float
+        Shaft angle at start [rad]; the history is filled assuming ``omega0`` [rad/s].
+    """
+
+    def __init__(self, counts: int, window_ticks: int, dt_s: float, theta0: float, omega0: float):
+        self.q = 2 * math.pi / counts
+        self.window = window_ticks
+        self.dt = dt_s
+        self.hist = deque((math.floor((theta0 - omega0 * dt_s * (window_ticks - i)) / self.q)
+                           for i in range(window_ticks + 1)), maxlen=window_ticks + 1)
+
+    def __call__(self, theta: float) -> tuple[float, float]:
+        """Add the angle after a tick; return (measured speed [rad/s], quantized angle in [0, 2π) [rad])."""
+        c = math.floor(theta / self.q)
+        self.hist.append(c)
+        speed = (self.hist[-1] - self.hist[0]) * self.q / (self.window * self.dt)
+        return speed, (c * self.q) % (2 * math.pi)
+
+
+def noise_streams(seed: int, names: tuple[str, ...]) -> dict[str, np.random.Generator]:
+    """One independent generator per noise source, all derived from ``seed``."""
+    children = np.random.SeedSequence(seed).spawn(len(names))
+    return {n: np.random.default_rng(s) for n, s in zip(names, children)}

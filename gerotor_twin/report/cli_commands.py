@@ -1,0 +1,90 @@
+"""``gerotor-twin`` subcommands of the offline part: ``synth-bench``, ``report``, ``run-bag``, ``replay``.
+
+:func:`register` adds them to the project's argparse sub-parsers (one call in
+``cli.py``).  Handlers import their modules lazily, so ``gerotor-twin --help``
+stays fast and only ``replay`` needs rclpy.  Bad input raises
+:class:`~gerotor_twin.errors.InputError` (printed as one line, exit 2);
+unreadable MCAP files raise :class:`~gerotor_twin.io.McapReadError`, turned
+into the same one-line form here.
+"""
+from __future__ import annotations
+
+import json
+import shlex
+import sys
+from pathlib import Path
+
+from gerotor_twin.errors import InputError
+
+__all__ = ["register"]
+
+
+def _as_input_error(exc: Exception) -> InputError:
+    path = getattr(exc, "path", "input")
+    what = getattr(exc, "what", str(exc))
+    return InputError(str(path), "(file)", "a readable ROS 2 MCAP file with the needed topics", what)
+
+
+def cmd_synth_bench(args) -> int:
+    from gerotor_twin.bench_emulator import BenchSpec, get_profile, synthesize
+    from gerotor_twin.bench_emulator.emulator import default_output_name
+
+    profile = get_profile(args.profile)
+    spec = BenchSpec(seed=args.seed, bearing=args.bearing, clearance_factor=args.clearance_factor,
+                     speed_rate_hz=args.speed_rate, pressure_rate_hz=args.pressure_rate,
+                     flow_rate_hz=args.flow_rate, temperature_rate_hz=args.temperature_rate)
+    out = Path(args.output) if args.output else default_output_name(profile)
+    if out.exists() and not args.overwrite:
+        raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    command = shlex.join(["gerotor-twin", "synth-bench", "--profile", profile.name, "-o", str(out),
+                          "--seed", str(spec.seed), "--bearing", spec.bearing,
+                          "--clearance-factor", f"{spec.clearance_factor:g}",
+                          "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
+                          "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
+                          f"{spec.temperature_rate_hz:g}"])
+    res = synthesize(profile, out, spec, overwrite=args.overwrite, command=command,
+                     progress=None if args.quiet else sys.stderr)
+    n = sum(res["message_counts"].values())
+    print(f"wrote {out} ({out.stat().st_size / 1e6:.2f} MB, {n} messages, {res['duration_s']:.1f} s, "
+          f"seed {spec.seed})")
+    for row in res["truth"]:
+        print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar: mean flow "
+              f"{row['true_mean_flow_m3s'] * 6e4:7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(res, indent=2))
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _add_synth(sub) -> None:
+    p = sub.add_parser("synth-bench", help="synthetic bench recording (emulated pump + sensors) to MCAP",
+                       description="Run the bench emulator (a pump that differs from the twin on purpose, "
+                                   "seen through bench sensors) along a profile and record the bench "
+                                   "topics to a rosbag2-convention MCAP file. Same seed -> same bytes.")
+    p.add_argument("--profile", default="transient", help="map | transient | test (default transient)")
+    p.add_argument("-o", "--output", help="MCAP file (default bags/bench_<profile>.mcap)")
+    p.add_argument("--seed", type=int, default=20240601, help="noise seed (default 20240601)")
+    p.add_argument("--bearing", default="short", help="outer-gear model of the emulated pump (default short)")
+    p.add_argument("--clearance-factor", type=float, default=1.10,
+                   help="tooth-tip and lateral clearances x nominal (default 1.10)")
+    p.add_argument("--speed-rate", type=float, default=100.0, help="shaft speed rate [Hz] (default 100)")
+    p.add_argument("--pressure-rate", type=float, default=100.0, help="pressure rate [Hz] (default 100)")
+    p.add_argument("--flow-rate", type=float, default=20.0, help="flow meter rate [Hz] (default 20)")
+    p.add_argument("--temperature-rate", type=float, default=5.0, help="thermometer rate [Hz] (default 5)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing file")
+    p.add_argument("--json", metavar="F", help="write counts and the ground truth per plateau to F")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=cmd_synth_bench)
+
+
+def register(subparsers) -> None:
+    """Add ``synth-bench``, ``report``, ``run-bag`` and ``replay`` to an argparse sub-parser set."""
+    _add_synth(subparsers)
+    for name in ("gerotor_twin.report.cli_report", "gerotor_twin.offline.cli_run_bag",
+                 "gerotor_twin.ros.cli_replay"):
+        try:
+            mod = __import__(name, fromlist=["add_parser"])
+        except ImportError:
+            continue
+        mod.add_parser(subparsers)
