@@ -1,0 +1,97 @@
+"""Output topics of the twin and the dict messages the core emits (no rclpy).
+
+==========================  ===============================  ==========================================
+topic (relative)            type                             content (SI)
+==========================  ===============================  ==========================================
+``twin/chamber_pressures``  std_msgs/Float64MultiArray       N chamber pressures, absolute [Pa];
+                                                             layout label ``chamber``
+``twin/delivery_flow``      std_msgs/Float64                 instantaneous delivery flow [m³/s]
+``twin/flow_summary``       std_msgs/Float64MultiArray       once per revolution, 4 values, layout label
+                                                             :data:`SUMMARY_LABEL`: revolution-mean
+                                                             delivery, theoretical, leakage [m³/s],
+                                                             volumetric efficiency [-]
+``twin/eccentricity``       geometry_msgs/Vector3Stamped     outer-gear centre displacement [m],
+                                                             frame ``pump_housing`` (z = 0)
+``twin/tooth_gaps``         std_msgs/Float64MultiArray       N minimum tooth-tip gap heights [m] since
+                                                             the previous publication; label ``gap``
+``twin/chamber_waveform``   std_msgs/Float64MultiArray       once per revolution: 2-D (``sample`` ×
+                                                             ``angle_p``): column 0 the angle within the
+                                                             revolution [rad], columns 1..N the chamber
+                                                             pressures [Pa]
+==========================  ===============================  ==========================================
+
+An :class:`OutputMessage` is ``(topic, msgtype, stamp_ns, msg)``; ``msg`` is a
+:mod:`gerotor_twin.io.messages` dict ready for
+:func:`gerotor_twin.io.codec.encode` or ``McapLog.write``.  ``stamp_ns`` is the
+clock time of the prediction (the MCAP ``log_time``).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from gerotor_twin.io import messages as m
+
+__all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "DIAGNOSTICS_TOPIC",
+           "all_finite"]
+
+CHAMBER_PRESSURES = "twin/chamber_pressures"
+DELIVERY_FLOW = "twin/delivery_flow"
+FLOW_SUMMARY = "twin/flow_summary"
+ECCENTRICITY = "twin/eccentricity"
+TOOTH_GAPS = "twin/tooth_gaps"
+CHAMBER_WAVEFORM = "twin/chamber_waveform"
+DIAGNOSTICS_TOPIC = "/diagnostics"
+
+#: topic -> message type of every output of the core (``/diagnostics`` is separate).
+OUTPUT_TOPICS: dict[str, str] = {
+    CHAMBER_PRESSURES: m.FLOAT64_MULTIARRAY,
+    DELIVERY_FLOW: m.FLOAT64,
+    FLOW_SUMMARY: m.FLOAT64_MULTIARRAY,
+    ECCENTRICITY: m.VECTOR3_STAMPED,
+    TOOTH_GAPS: m.FLOAT64_MULTIARRAY,
+    CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
+}
+
+#: Order of the values in ``twin/flow_summary``.
+SUMMARY_FIELDS = ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")
+#: Its layout label (the field names, comma separated).
+SUMMARY_LABEL = ",".join(SUMMARY_FIELDS)
+
+
+class OutputMessage(NamedTuple):
+    """One message the core wants published (and logged)."""
+    topic: str          #: relative topic name, e.g. ``twin/delivery_flow``
+    msgtype: str        #: ``pkg/msg/Type``
+    stamp_ns: int       #: clock time of the prediction [ns]
+    msg: dict           #: :mod:`gerotor_twin.io.messages` dict
+
+
+def all_finite(*arrays) -> bool:
+    """True if every value of every argument is finite."""
+    return all(bool(np.all(np.isfinite(np.asarray(a, dtype=float)))) for a in arrays)
+
+
+def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min) -> list[OutputMessage]:
+    """The four periodic outputs at one instant (caller checked finiteness)."""
+    return [
+        OutputMessage(CHAMBER_PRESSURES, m.FLOAT64_MULTIARRAY, stamp_ns,
+                      m.float64_multiarray(pressures, ("chamber",))),
+        OutputMessage(DELIVERY_FLOW, m.FLOAT64, stamp_ns, m.float64(flow)),
+        OutputMessage(ECCENTRICITY, m.VECTOR3_STAMPED, stamp_ns,
+                      m.vector3_stamped(stamp_ns, float(ecc[0]), float(ecc[1]), 0.0)),
+        OutputMessage(TOOTH_GAPS, m.FLOAT64_MULTIARRAY, stamp_ns, m.float64_multiarray(gaps_min, ("gap",))),
+    ]
+
+
+def summary(stamp_ns: int, values) -> OutputMessage:
+    """``twin/flow_summary`` (values in :data:`SUMMARY_FIELDS` order)."""
+    return OutputMessage(FLOW_SUMMARY, m.FLOAT64_MULTIARRAY, stamp_ns,
+                         m.float64_multiarray(values, (SUMMARY_LABEL,)))
+
+
+def waveform(stamp_ns: int, table) -> OutputMessage:
+    """``twin/chamber_waveform`` from a (samples, 1 + N) table."""
+    return OutputMessage(CHAMBER_WAVEFORM, m.FLOAT64_MULTIARRAY, stamp_ns,
+                         m.float64_multiarray(table, ("sample", "angle_p")))
