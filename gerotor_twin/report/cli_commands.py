@@ -81,10 +81,12 @@ def _add_synth(sub) -> None:
 def register(subparsers) -> None:
     """Add ``synth-bench``, ``report``, ``run-bag`` and ``replay`` to an argparse sub-parser set."""
     _add_synth(subparsers)
-    for name in ("gerotor_twin.report.cli_report", "gerotor_twin.offline.cli_run_bag",
-                 "gerotor_twin.ros.cli_replay"):
+    import importlib
+    for name in ("gerotor_twin.report.build", "gerotor_twin.offline.run_bag", "gerotor_twin.ros.replay_cli"):
         try:
-            mod = __import__(name, fromlist=["add_parser"])
-        except ImportError:
+            mod = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name != name:    # a missing dependency is a real error; only a missing module is skipped
+                raise
             continue
         mod.add_parser(subparsers)
