@@ -131,6 +131,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
         core.pop_events()
 
     try:
+        tick(t_first)     # pins the core's time origin to the bag, whatever the tick spacing
         for log_ns, pub_ns, ch, msg in rows:
             while log_ns >= next_tick:
                 tick(next_tick)
