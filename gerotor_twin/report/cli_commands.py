@@ -82,7 +82,7 @@ def register(subparsers) -> None:
     """Add ``synth-bench``, ``report``, ``run-bag`` and ``replay`` to an argparse sub-parser set."""
     _add_synth(subparsers)
     import importlib
-    for name in ("gerotor_twin.report.build", "gerotor_twin.offline.run_bag", "gerotor_twin.ros.replay_cli"):
+    for name in ("gerotor_twin.report.build", "gerotor_twin.offline.run_bag", "gerotor_twin.ros.replay"):
         try:
             mod = importlib.import_module(name)
         except ModuleNotFoundError as exc:
