@@ -91,6 +91,12 @@ def cmd_simulate(args) -> int:
     ex, ey = s["mean_eccentricity_m"]
     print(f"  mean eccentricity       ({ex * 1e6:.2f}, {ey * 1e6:.2f}) µm")
     print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm")
+    c = s["counts"]
+    if c.get("housing_contact"):
+        print(f"  warning: the outer gear reached the housing-film limit (ε = 0.95) in {c['housing_contact']} "
+              f"steps: metal contact in reality; the eccentricity was held at the limit", file=sys.stderr)
+    if c.get("solver_failures"):
+        print(f"  warning: {c['solver_failures']} solver failures", file=sys.stderr)
     if args.json:
         _write_json(args.json, s)
     if args.plot:
@@ -146,9 +152,16 @@ def cmd_bench(args) -> int:
 
     cfg = load_config(args.config)
     if args.what == "realtime":
-        rows = realtime(cfg, models=tuple(args.models.split(",")), seconds=args.seconds, repeats=args.repeats)
+        rows = realtime(cfg, models=tuple((args.models or "fixed,mobility").split(",")), seconds=args.seconds,
+                        repeats=args.repeats)
         if args.json:
             _write_json(args.json, {"realtime": rows})
+    elif args.what == "models":
+        from .model.bench import models_cost
+        rows = models_cost(cfg, models=tuple((args.models or "fixed,mobility,short,fdm").split(",")),
+                           revolutions=args.repeats)
+        if args.json:
+            _write_json(args.json, {"models": rows})
     return 0
 
 
@@ -167,8 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--rpm", type=float, required=True, help="shaft speed [rpm]")
     s.add_argument("--bar", type=float, required=True, help="delivery pressure [bar gauge]")
     s.add_argument("--revolutions", type=int, default=30, help="max revolutions to reach periodic state")
-    s.add_argument("--model", default="fixed", choices=("fixed", "mobility", "short", "fdm"),
-                   help="outer-gear model")
+    s.add_argument("--model", default="mobility", choices=("fixed", "mobility", "short", "fdm"),
+                   help="outer-gear model (default: mobility, the twin's)")
     s.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     s.add_argument("--json", help="write the results to this JSON file")
     s.add_argument("--plot", help="write chamber-1 pressure and delivery flow vs angle (PNG)")
@@ -176,24 +189,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", help="the main job of `make demo`")
     d.add_argument("--out", default="out/demo", help="output directory")
-    d.add_argument("--model", default="fixed", choices=("fixed", "mobility", "short", "fdm"))
+    d.add_argument("--model", default="mobility", choices=("fixed", "mobility", "short", "fdm"))
     d.add_argument("--config", help="pump YAML")
     d.set_defaults(func=cmd_demo)
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
-    b.add_argument("what", choices=("realtime",), help="realtime: model real-time factor at 1000/2000/3000 rpm")
-    b.add_argument("--models", default="fixed,mobility", help="comma-separated outer-gear models")
+    b.add_argument("what", choices=("realtime", "models"),
+                   help="realtime: model real-time factor at 1000/2000/3000 rpm; "
+                        "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
+    b.add_argument("--models", help="comma-separated outer-gear models "
+                                     "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")
     b.add_argument("--repeats", type=int, default=3)
     b.add_argument("--config", help="pump YAML")
     b.add_argument("--json", help="write the figures to this JSON file")
     b.set_defaults(func=cmd_bench)
 
-    try:
-        from .bearing.cli_commands import register
-        register(sub)
-    except ImportError:
-        pass
+    from .bearing.cli_commands import register as register_bearing
+    from .paper.cli_commands import register as register_paper
+    register_bearing(sub)
+    register_paper(sub)
     from .report.cli_commands import register as register_offline   # synth-bench, report, run-bag, replay
     register_offline(sub)
     return p

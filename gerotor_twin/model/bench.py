@@ -7,7 +7,7 @@ import time
 
 from .pump import Inputs, PumpModel
 
-__all__ = ["realtime"]
+__all__ = ["realtime", "models_cost"]
 
 
 def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), bar=27.5, seconds=1.0,
@@ -36,4 +36,39 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
             rows.append({"model": name, "rpm": rpm, "wall_s": wall, "real_time_factor": seconds / wall,
                          "substeps_per_s": sub})
             out(f"  {name:9s} {rpm:5d} {wall:9.3f} {seconds / wall:6.2f} {sub:12.0f}")
+    return rows
+
+
+def models_cost(config, models=("fixed", "mobility", "short", "fdm"), speeds=(1000, 3000), bar=27.5,
+                revolutions=1, out=print) -> list[dict]:
+    """Wall time per simulated revolution of each outer-gear model (sec. 4 of [1]: the cost).
+
+    Each model starts from the periodic state of the mobility model at the same point
+    (so the slow models are timed at their working point, not on a start-up transient),
+    and is timed over ``revolutions`` revolutions after a one-step JIT warm-up.
+    """
+    from .steady import run_steady
+
+    rows = []
+    out(f"wall time per simulated revolution ({bar:g} bar, {revolutions} rev timed, one core)")
+    out(f"  {'model':9s} {'rpm':>5s} {'wall/rev [s]':>13s} {'× mobility':>11s} {'real-time factor':>17s}")
+    warm = {rpm: run_steady(PumpModel(config, "mobility"), rpm, bar).state for rpm in speeds}
+    base = {}
+    for name in models:
+        m = PumpModel(config, name)
+        for rpm in speeds:
+            inp = Inputs(rpm * math.pi / 30, config.boundary.suction_pressure_pa,
+                         config.fluid.atmospheric_pa + bar * 1e5)
+            period = 2 * math.pi / inp.omega
+            s, _ = m.advance(warm[rpm], m.step_size(inp.omega), inp)      # JIT / first-call warm-up
+            t0 = time.perf_counter()
+            m.advance(s, revolutions * period, inp)
+            wall = (time.perf_counter() - t0) / revolutions
+            if name == "mobility":
+                base[rpm] = wall
+            rows.append({"model": name, "rpm": rpm, "wall_s_per_rev": wall, "real_time_factor": period / wall})
+    for r in rows:
+        r["relative_to_mobility"] = r["wall_s_per_rev"] / base[r["rpm"]] if base.get(r["rpm"]) else None
+        rel = f"{r['relative_to_mobility']:11.2f}" if r["relative_to_mobility"] else f"{'-':>11s}"
+        out(f"  {r['model']:9s} {r['rpm']:5d} {r['wall_s_per_rev']:13.4f} {rel} {r['real_time_factor']:17.3g}")
     return rows

@@ -60,7 +60,8 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25):
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
-               rtol: float = 2e-4, p_suction: float | None = None, progress=None) -> SteadyResult:
+               rtol: float = 2e-4, p_suction: float | None = None, progress=None,
+               state: PumpState | None = None, etol: float = 2e-3) -> SteadyResult:
     """Run revolutions until the revolution-mean delivery flow settles, then record one.
 
     Parameters
@@ -73,6 +74,13 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
         Delivery gauge pressure [bar] (imposed mode; ignored in restriction mode).
     rtol : float
         Settling criterion on the relative change of the revolution mean [-].
+    state : PumpState, optional
+        Warm start (e.g. the periodic state of a cheaper outer-gear model); its time and
+        angle are kept, its pressures and eccentricity are the initial guess.
+    etol : float
+        Settling criterion on the change of the revolution-mean eccentricity, as a
+        fraction of the housing clearance c [-] (the outer gear settles more slowly
+        than the pressures).
     """
     if not (math.isfinite(rpm) and rpm > 0):
         raise InputError("--rpm", rpm, f"(0, {model.config.range.max_speed_rpm:g}] rpm")
@@ -90,21 +98,24 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
                    "--bar": f"[0, {rng.max_delivery_bar:g}] bar"}.get(name, exc.allowed)
         raise InputError(name, rpm if name == "--rpm" else bar, allowed) from None
     period = 2 * math.pi / inputs.omega
-    state = model.initial_state(inputs)
-    last = None
+    state = model.initial_state(inputs) if state is None else state
+    c = model.config.clearances.housing_radial_m
+    last = last_e = None
     n = 0
     change = float("inf")
     while n < max_revolutions:
         state, out = model.advance(state, period, inputs)
         n += 1
         mean = out.volumetric_efficiency
+        mean_e = out.eccentricity.mean(axis=0)
         if last is not None:
-            change = abs(mean - last) / max(abs(mean), 1e-12)
+            change = max(abs(mean - last) / max(abs(mean), 1e-12),
+                         rtol * float(np.hypot(*(mean_e - last_e))) / (etol * c))
         if progress is not None:
             progress(n, change)
         if n >= min_revolutions and change < rtol:
             break
-        last = mean
+        last, last_e = mean, mean_e
     state, out = model.advance(state, period, inputs)
     eta = out.volumetric_efficiency
     final_change = abs(eta - last) / max(abs(eta), 1e-12) if last is not None else float("nan")

@@ -1,0 +1,168 @@
+"""Section 4 of the paper: tables 3–5 and the qualitative findings (test tier 2).
+
+Reference values are the paper's tables 3–5 (``gerotor_twin.paper.reference``), typed
+from ``../shared/paper/gerotor-micromotion-paper.md``; nothing here comes from the code
+under test.  Findings of sec. 4 that this model does not reproduce are ``xfail(strict)``
+with the reason, so the discrepancy stays visible and a fix is noticed.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gerotor_twin.cli import main
+from gerotor_twin.paper.calibration import DEFAULT_RESULT_PATH, acceptance
+from gerotor_twin.paper.efficiency import row_slopes
+from gerotor_twin.paper.reference import PAPER_EFFICIENCY, PRESSURES_BAR, SPEEDS_RPM, slope_per_bar
+
+
+@pytest.fixture(scope="module")
+def tables(tmp_path_factory):
+    """`gerotor-twin paper efficiency --json` for fixed and mobility (one run, 36 points)."""
+    path = tmp_path_factory.mktemp("paper") / "eff.json"
+    assert main(["paper", "efficiency", "--json", str(path)]) == 0
+    return json.loads(path.read_text())
+
+
+@pytest.fixture(scope="module")
+def section4(cfg):
+    from gerotor_twin.paper.section4 import run_section4
+    return run_section4(cfg)
+
+
+def test_reference_tables_are_linear_in_pressure_with_slope_inverse_to_speed():
+    """Sanity of the typed values: the fixed rows fall ∝ Δp/n (within 3 %), as leakage does."""
+    s = {n: slope_per_bar(PRESSURES_BAR, PAPER_EFFICIENCY[("fixed", n)]) * n for n in SPEEDS_RPM}
+    assert max(s.values()) / min(s.values()) == pytest.approx(1.0, abs=0.035)
+
+
+def test_efficiency_json_schema(tables):
+    pts = tables["points"]
+    assert len(pts) == 36
+    for p in pts:
+        assert set(("rpm", "bar", "model", "volumetric_efficiency", "paper")) <= set(p)
+        assert p["model"] in ("fixed", "mobility")
+        assert 0.0 < p["volumetric_efficiency"] < 1.0 and 0.0 < p["paper"] < 1.0
+
+
+def test_calibrated_fixed_centre_matches_tables_3_to_5(tables):
+    """Issue 4 acceptance: every point within ±2 pt, slope within 10 % at each speed."""
+    fixed = [p for p in tables["points"] if p["model"] == "fixed"]
+    for p in fixed:
+        assert p["volumetric_efficiency"] == pytest.approx(p["paper"], abs=0.02), p
+    for s in row_slopes(fixed):
+        assert s["slope_per_bar"] == pytest.approx(s["paper_slope_per_bar"], rel=0.10), s
+    assert acceptance(fixed, row_slopes(fixed))["passed"]
+
+
+def test_config_uses_the_recorded_calibration(cfg):
+    """config/pump.yaml carries the clearances of docs/calibration.json (to 0.01 µm)."""
+    res = json.loads(DEFAULT_RESULT_PATH.read_text())
+    assert res["acceptance"]["passed"]
+    assert cfg.clearances.tooth_tip_m == pytest.approx(res["tooth_tip_m"], abs=1e-8)
+    assert cfg.clearances.lateral_m == pytest.approx(res["lateral_m"], abs=1e-8)
+
+
+def test_micro_motion_models_give_close_trajectories(section4, cfg):
+    """Mobility, Method 1 and FDM: mean centre within 10 % of the tooth-tip clearance δ.
+
+    Why 10 % of δ: the three film models differ by 1.5–13 % in the film force for the
+    same eccentricity (docs/bearing.md), and here the outer gear rests against the inner
+    gear, so its excursion is bounded by δ rather than by the housing clearance c.
+    """
+    delta = cfg.clearances.tooth_tip_m
+    means = {m: section4["cycles"][m].eccentricity.mean(axis=0) for m in ("mobility", "short", "fdm")}
+    for m in ("short", "fdm"):
+        assert np.hypot(*(means[m] - means["mobility"])) < 0.1 * delta, (m, means)
+    for m in means:
+        e = section4["cycles"][m].eccentricity
+        assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
+
+
+def test_trajectory_moves_opposite_ways_with_pressure_and_speed(cfg):
+    """Sec. 4: raising pressure at constant speed and raising speed at constant pressure
+    move the centre in opposite directions along x (the paper's "left"/"right"; its fig. 13
+    frame is not given in the text, so only the opposition is asserted, plus our sign)."""
+    from gerotor_twin.model.pump import PumpModel
+    from gerotor_twin.model.steady import run_steady
+
+    m = PumpModel(cfg, "mobility")
+    x = {(n, p): run_steady(m, n, p).outputs.eccentricity[:, 0].mean() for n, p in
+         ((1000, 5.0), (1000, 27.5), (3000, 27.5))}
+    by_pressure = x[(1000, 27.5)] - x[(1000, 5.0)]
+    by_speed = x[(3000, 27.5)] - x[(1000, 27.5)]
+    assert abs(by_pressure) > 0.5e-6 and abs(by_speed) > 0.5e-6, x
+    assert by_pressure * by_speed < 0, x
+
+
+@pytest.mark.xfail(strict=True, reason="not reproduced: with the calibrated clearances the tooth-tip gaps carry "
+                   "a few % of the leakage and the outer gear rests on the inner gear, so micro-motion changes "
+                   "η by < 0.2 pt (README, 'Section 4')")
+def test_micro_motion_raises_volumetric_efficiency(tables):
+    """Tables 3–5: MM above fixed by 1.35–2.6 pt at every point; we ask for ≥ 0.5 pt."""
+    by = {(p["model"], p["rpm"], p["bar"]): p["volumetric_efficiency"] for p in tables["points"]}
+    for n in SPEEDS_RPM:
+        for p in PRESSURES_BAR:
+            assert by[("mobility", n, p)] - by[("fixed", n, p)] > 0.005
+
+
+@pytest.mark.xfail(strict=True, reason="not reproduced: see README, 'Section 4'")
+def test_fixed_centre_has_the_deeper_depression(section4):
+    """Fig. 14: near the delivery-to-suction transition the fixed-centre chamber pressure
+    dips lower than with micro-motion."""
+    low = {m: section4["cycles"][m].chamber_pressures[:, 0].min() for m in ("fixed", "mobility")}
+    assert low["fixed"] < low["mobility"] - 1e3, low
+
+
+def test_section4_restriction_gives_the_design_pressure(section4):
+    """The restriction sized for 27.5 bar with the fixed centre gives 27.5 bar (±2 %) on its
+    own run, from a fresh start in restriction mode (a consistency check of the two modes)."""
+    pd = section4["fixed"].outputs.delivery_pressure.mean() - 101325.0
+    assert pd == pytest.approx(27.5e5, rel=0.02)
+
+
+def test_figures_written(tmp_path):
+    assert main(["paper", "figures", "--out", str(tmp_path), "--models", "fixed,mobility"]) == 0
+    names = sorted(p.name for p in tmp_path.glob("fig1*.png"))
+    assert names == ["fig12_gap_vs_pressure_speed.png", "fig13_trajectories.png", "fig14_chamber1_pressure.png",
+                     "fig15_delivery_pressure.png", "fig16_gap_height_length.png"]
+    assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
+
+
+def test_equivalent_length_closed_form(fixed_model):
+    """l_e = 2√(2 h d_h/κ) is where two circles of relative curvature κ part by h·d_h
+    (parabolic film h + x²κ/2 = h(1 + d_h) at x = l_e/2)."""
+    from gerotor_twin.paper.figures import equivalent_length
+    h = 30e-6
+    theta = np.array([0.1, 1.0])
+    le = equivalent_length(fixed_model, theta, np.full(2, h))
+    kappa = fixed_model.tables.column("KREL", theta, 0)
+    x = le / 2
+    assert np.allclose(h + x ** 2 * kappa / 2, h * (1 + fixed_model.config.tip_dh))
+
+
+def test_bench_models_prints_a_row_per_model_and_speed(capsys):
+    assert main(["bench", "models", "--models", "fixed,mobility", "--repeats", "1"]) == 0
+    rows = [ln.split() for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")]
+    assert sorted((r[0], r[1]) for r in rows if r[0] in ("fixed", "mobility")) == [
+        ("fixed", "1000"), ("fixed", "3000"), ("mobility", "1000"), ("mobility", "3000")]
+
+
+def test_housing_contact_is_reported_not_clamped_silently(cfg):
+    """A bearing that cannot carry the load (20 µm housing clearance, 0.5 mPa·s oil): the
+    outer gear reaches the film limit ε = 0.95 — the steps are counted
+    (``housing_contact``, printed by ``simulate``) and everything stays finite."""
+    from dataclasses import replace
+
+    from gerotor_twin.model.pump import PumpModel
+    from gerotor_twin.model.steady import run_steady
+
+    c = 20e-6
+    weak = replace(cfg, clearances=replace(cfg.clearances, housing_radial_m=c),
+                   fluid=replace(cfg.fluid, viscosity_pa_s=5e-4))
+    r = run_steady(PumpModel(weak, "mobility"), 1000, 27.5, max_revolutions=5)
+    s = r.summary()
+    assert s["counts"]["housing_contact"] > 0
+    assert np.all(np.isfinite(r.outputs.chamber_pressures)) and math.isfinite(s["volumetric_efficiency"])
+    assert max(np.hypot(*r.outputs.eccentricity.T)) <= 0.95 * c * (1 + 1e-9)
