@@ -283,7 +283,7 @@ def rhs(y, theta, omega, ps, pd_in, h_gap, tab, period, shift, prm, f, jac, want
             krel = interp(tab, KREL, tj, period)
             le = 2.0 * math.sqrt(2.0 * hk * dh / krel)
             q, dq = tooth_tip_flow(p[jm] - pj, hk, le, omega * interp(tab, VR, tj, period), b, mu)
-        # lateral leakage across the lobe land, sec. 3.2
+        # lateral leakage across the lobe land, sec. 3.2 (independent of the micro-motion, as in [1])
         q += glat * (p[jm] - pj)
         dq += glat
         if q > 0.0:
