@@ -43,7 +43,12 @@ def cmd_synth_bench(args) -> int:
                           "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
                           "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
                           f"{spec.temperature_rate_hz:g}"])
-    res = synthesize(profile, out, spec, overwrite=args.overwrite, command=command,
+    config = None
+    if args.config:
+        from gerotor_twin.config import load_config
+        config = load_config(args.config)
+        command += " --config " + shlex.quote(args.config)
+    res = synthesize(profile, out, spec, config=config, overwrite=args.overwrite, command=command,
                      progress=None if args.quiet else sys.stderr)
     n = sum(res["message_counts"].values())
     print(f"wrote {out} ({out.stat().st_size / 1e6:.2f} MB, {n} messages, {res['duration_s']:.1f} s, "
@@ -72,6 +77,7 @@ def _add_synth(sub) -> None:
     p.add_argument("--pressure-rate", type=float, default=100.0, help="pressure rate [Hz] (default 100)")
     p.add_argument("--flow-rate", type=float, default=20.0, help="flow meter rate [Hz] (default 20)")
     p.add_argument("--temperature-rate", type=float, default=5.0, help="thermometer rate [Hz] (default 5)")
+    p.add_argument("--config", help="nominal pump YAML the emulated pump derives from (default config/pump.yaml)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing file")
     p.add_argument("--json", metavar="F", help="write counts and the ground truth per plateau to F")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")

@@ -175,7 +175,7 @@ def load_twin(path: str | Path, t0_ns: int, label: str | None = None) -> TwinDat
     meta = f.metadata
     params = meta.get("gerotor_twin.node_parameters", {})
     cfg = meta.get("gerotor_twin.pump_config", {}).get("yaml")
-    model = params.get("bearing_model") or meta.get("gerotor_twin.run_bag", {}).get("model")
+    model = (params.get("bearing_model") or meta.get("gerotor_twin.run_bag", {}).get("model") or "").strip("'\"")
     data = TwinData(path=str(path), label=label or (f"twin ({model})" if model else Path(path).stem),
                     summary=(t, v[:, :4]), pump_config_yaml=cfg, parameters=dict(params),
                     missing=missing, warnings=notes)
