@@ -26,6 +26,7 @@ setup(
     entry_points={
         "console_scripts": [
             "gerotor-twin = gerotor_twin.cli:main",
+            "twin_node = gerotor_twin.ros.node:main",
         ],
     },
 )

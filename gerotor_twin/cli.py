@@ -211,6 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
     register_paper(sub)
     from .report.cli_commands import register as register_offline   # synth-bench, report, run-bag, replay
     register_offline(sub)
+    from .ros.cli_commands import register as register_node          # node, bench node
+    register_node(sub)
     return p
 
 

@@ -174,6 +174,13 @@ class TwinCore:
             return False
         return self.add_sample(kind, value, stamp, receive_ns)
 
+    def reject(self, kind: str, text: str, receive_ns: int, reason: str = "malformed") -> None:
+        """Count and report a message of ``kind`` that could not even be decoded."""
+        if kind not in INPUTS:
+            raise InputError("input", kind, " | ".join(INPUTS))
+        with self._lock:
+            self._reject(self._channels[kind], reason, text, int(receive_ns))
+
     def add_sample(self, kind: str, value: float, stamp_ns: int | None, receive_ns: int) -> bool:
         """Add one input sample.
 
@@ -314,8 +321,11 @@ class TwinCore:
         span = target - self._t_ns
         keep = span if self.settings.max_span_s == math.inf else (self.settings.max_span_ns // S) * S
         if span > keep:
-            self._skip(span - keep, now_ns)
-            res.skipped_s = (span - keep) / NS
+            if self._state is None:          # nothing to advance: just move on
+                self._t_ns += span - keep
+            else:
+                self._skip(span - keep, now_ns)
+                res.skipped_s = (span - keep) / NS
         g = self._t_ns
         while g < target:
             self._cell(g, res)

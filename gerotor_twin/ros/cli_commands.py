@@ -1,0 +1,47 @@
+"""``gerotor-twin node`` (run the twin node) and ``gerotor-twin bench node`` (node benchmark).
+
+:func:`register` adds ``node`` to the project's sub-parsers and teaches the
+existing ``bench`` sub-command the choice ``node``; rclpy is imported only
+when one of them runs.
+"""
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> None:
+    """Add ``node`` and ``bench node`` to an argparse sub-parser set."""
+    n = subparsers.add_parser(
+        "node", help="run the ROS 2 twin node (same as `twin_node`); pass --ros-args ... after it",
+        description="Run twin_node. Everything after `node` goes to ROS, e.g. "
+                    "`gerotor-twin node --ros-args --params-file config/twin.yaml`.")
+    n.add_argument("ros_args", nargs=argparse.REMAINDER, help="--ros-args ...")
+    n.set_defaults(func=_cmd_node)
+
+    bench = subparsers.choices.get("bench")
+    if bench is None:
+        return
+    for action in bench._actions:                                    # noqa: SLF001 - extend choices
+        if action.dest == "what" and action.choices is not None:
+            action.choices = tuple(action.choices) + ("node",)
+            action.help = (action.help or "") + "; node: twin node startup time and node-level RTF"
+    bench.add_argument("--node-model", default="mobility", help="bench node: outer-gear model")
+    bench.add_argument("--node-rpms", default="1000,2000,3000", help="bench node: comma-separated speeds [rpm]")
+    bench.add_argument("--node-seconds", type=float, default=4.0, help="bench node: run time per speed [s]")
+    previous = bench.get_default("func")
+
+    def dispatch(args):
+        if args.what == "node":
+            from gerotor_twin.ros.bench_node import cmd_bench_node
+            return cmd_bench_node(args)
+        return previous(args)
+
+    bench.set_defaults(func=dispatch)
+
+
+def _cmd_node(args) -> int:
+    from gerotor_twin.ros.node import main
+    rest = list(args.ros_args)
+    return main(["twin_node", *rest])
