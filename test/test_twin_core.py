@@ -275,3 +275,11 @@ def test_messages_from_cdr(model):
 def test_settings_validated(kw, field):
     with pytest.raises(InputError, match=field):
         TwinSettings(**kw)
+
+
+@pytest.mark.parametrize("labels,shape", [(("chamber",), (7,)), (("sample", "angle_p"), (720, 8)),
+                                          ((SUMMARY_LABEL,), (4,)), (("x",), (0,)), (("",), (3,))])
+def test_fast_multiarray_cdr_matches_codec(labels, shape):
+    from gerotor_twin.twin.fastcdr import encode_float64_multiarray
+    msg = m.float64_multiarray(np.random.default_rng(0).random(shape), labels)
+    assert encode_float64_multiarray(msg) == encode(m.FLOAT64_MULTIARRAY, msg)
