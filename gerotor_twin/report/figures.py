@@ -157,26 +157,35 @@ def fig_trajectory(twins: list[TwinData], plateaus: list[Plateau], clearance_m: 
     """Outer-gear centre displacement in the clearance circle, coloured by plateau."""
     if not any(tw.eccentricity is not None for tw in twins):
         return None
-    fig, ax = plt.subplots(figsize=(5.2, 5.0))
+    fig, axes = plt.subplots(1, 2, figsize=(9.6, 4.6))
     c = clearance_m * 1e6
     ang = np.linspace(0, 2 * math.pi, 361)
-    ax.plot(c * np.cos(ang), c * np.sin(ang), "k-", lw=1.0, label=f"clearance c = {c:.1f} µm")
     cmap = plt.get_cmap("viridis")
-    for i, tw in enumerate(twins):
-        if tw.eccentricity is None:
-            continue
-        t, e = tw.eccentricity
-        ax.plot(e[:, 0] * 1e6, e[:, 1] * 1e6, _STYLES[i % 4], color="0.6", lw=0.4)
-        for p in plateaus:
-            s = (t >= p.t0) & (t <= p.t1)
-            ax.plot(e[s, 0] * 1e6, e[s, 1] * 1e6, ".", ms=2 if i == 0 else 1,
-                    color=cmap((p.index - 1) / max(1, len(plateaus) - 1)))
-        ax.plot([], [], _STYLES[i % 4], color="0.6", label=tw.label)
-    ax.set_aspect("equal")
-    ax.set_xlabel("e_x [µm]")
-    ax.set_ylabel("e_y [µm]")
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_title("outer-gear centre (dots: plateaus, dark→light in order)", fontsize=9)
+    pts = []
+    for ax in axes:
+        ax.plot(c * np.cos(ang), c * np.sin(ang), "k-", lw=1.0, label=f"clearance c = {c:.1f} µm")
+        for i, tw in enumerate(twins):
+            if tw.eccentricity is None:
+                continue
+            t, e = tw.eccentricity
+            ax.plot(e[:, 0] * 1e6, e[:, 1] * 1e6, _STYLES[i % 4], color="0.6", lw=0.4)
+            for p in plateaus:
+                s = (t >= p.t0) & (t <= p.t1)
+                ax.plot(e[s, 0] * 1e6, e[s, 1] * 1e6, ".", ms=2 if i == 0 else 1,
+                        color=cmap((p.index - 1) / max(1, len(plateaus) - 1)))
+            ax.plot([], [], _STYLES[i % 4], color="0.6", label=tw.label)
+            pts.append(e * 1e6)
+        ax.set_aspect("equal")
+        ax.set_xlabel("e_x [µm]")
+        ax.set_ylabel("e_y [µm]")
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[0].set_title("in the clearance circle (dots: plateaus, dark→light)", fontsize=9)
+    allp = np.concatenate(pts)
+    lo, hi = np.nanmin(allp, axis=0), np.nanmax(allp, axis=0)
+    mid, half = 0.5 * (lo + hi), 0.6 * max(float(np.max(hi - lo)), 0.02 * c)
+    axes[1].set_xlim(mid[0] - half, mid[0] + half)
+    axes[1].set_ylim(mid[1] - half, mid[1] + half)
+    axes[1].set_title("zoom on the trajectory", fontsize=9)
     fig.tight_layout()
     return _png(fig)
 
