@@ -70,7 +70,7 @@ def test_content_follows_profile(test_bag):
     assert abs(gauge[-1] - 15) < 0.5                                 # valve tau 80 ms after the step
     _, q = scalar_series(series["/bench/delivery_flow"], "data")
     qth = 22.78e-6 * 1000 / 60
-    assert np.all((q > 0.9 * qth) & (q < qth))                       # leaky pump: 90-100 % of theoretical
+    assert np.all((q > 0.6 * qth) & (q < qth))                       # leaky pump: below theoretical
 
 
 def test_emulated_pump_is_leakier(cfg):
