@@ -145,3 +145,9 @@ def test_node_and_run_bag_agree(tmp_path):
     mean_rel = np.interp(to[sel], tn, vn[:, 0]).mean() / vo[sel, 0].mean() - 1
     assert abs(mean_rel) < 1e-3
     assert np.abs(rel).max() < 5e-3
+    # the report reads the node's log and the offline run alike, every figure drawn
+    from gerotor_twin.report.build import build_report
+    res = build_report(bag, [node_log, off], tmp_path / "r.html", labels=["node", "run-bag"])
+    assert res["figures_drawn"] == 6 and len(res["plateaus"]) == 1
+    a, b = (t["overall"]["flow_error_m3s"]["bias"] for t in res["twins"])
+    assert abs(a - b) < 2e-3 * np.mean(vo[sel, 0])
