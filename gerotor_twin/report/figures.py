@@ -174,13 +174,14 @@ def fig_trajectory(twins: list[TwinData], plateaus: list[Plateau], clearance_m: 
                 ax.plot(e[s, 0] * 1e6, e[s, 1] * 1e6, ".", ms=2 if i == 0 else 1,
                         color=cmap((p.index - 1) / max(1, len(plateaus) - 1)))
             ax.plot([], [], _STYLES[i % 4], color="0.6", label=tw.label)
-            pts.append(e * 1e6)
+            if np.any(e != 0):          # a fixed-centre twin would only pin the zoom to the origin
+                pts.append(e * 1e6)
         ax.set_aspect("equal")
         ax.set_xlabel("e_x [µm]")
         ax.set_ylabel("e_y [µm]")
     axes[0].legend(fontsize=7, loc="upper right")
     axes[0].set_title("in the clearance circle (dots: plateaus, dark→light)", fontsize=9)
-    allp = np.concatenate(pts)
+    allp = np.concatenate(pts) if pts else np.zeros((1, 2))
     lo, hi = np.nanmin(allp, axis=0), np.nanmax(allp, axis=0)
     mid, half = 0.5 * (lo + hi), 0.6 * max(float(np.max(hi - lo)), 0.02 * c)
     axes[1].set_xlim(mid[0] - half, mid[0] + half)
