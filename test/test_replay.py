@@ -80,7 +80,7 @@ def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
     try:
         assert sub.stdout.readline().strip() == "ready"
         rep = _start([sys.executable, "-m", "gerotor_twin", "replay", str(bag), "--rate", "2", "--clock-rate", "40",
-                      "--delay", "2"], 61)
+                      "--delay", "0.5", "--wait-subscribers", "1"], 61)
         _, err = rep.communicate(timeout=60)
         assert rep.returncode == 0, err
         assert "finished: 300 messages" in err

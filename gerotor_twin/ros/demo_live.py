@@ -70,7 +70,8 @@ def main(argv=None) -> int:
         startup = next((ln.strip() for ln in lines if "ready in" in ln), "")
         print(f"demo: node {startup[startup.find('ready in'):]}", flush=True)
         rep = subprocess.run([sys.executable, "-m", "gerotor_twin", "replay", args.bag, "--rate", str(args.rate),
-                              "--clock-rate", "50", "--delay", "1.5"], cwd=ROOT, env=env)
+                              "--clock-rate", "50", "--delay", "0.5", "--wait-subscribers", "1"],
+                             cwd=ROOT, env=env)
         if rep.returncode != 0:
             print("demo: replay failed", file=sys.stderr)
             return 1

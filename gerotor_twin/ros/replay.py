@@ -64,7 +64,8 @@ def _msg_class(msgtype: str):
 
 
 def replay(bag, *, rate: float = 1.0, loop: bool = False, topics=None, clock_rate: float = 50.0,
-           delay_s: float = 1.0, progress: IO[str] | None = sys.stderr, stop: threading.Event | None = None) -> dict:
+           delay_s: float = 1.0, progress: IO[str] | None = sys.stderr, stop: threading.Event | None = None,
+           wait_subscribers: int = 0, wait_timeout_s: float = 15.0) -> dict:
     """Publish a bag's messages with their recorded timing (÷ ``rate``) and ``/clock``.
 
     Parameters
@@ -81,6 +82,12 @@ def replay(bag, *, rate: float = 1.0, loop: bool = False, topics=None, clock_rat
         ``/clock`` publications per second of wall time [Hz] (0: no ``/clock``).
     delay_s : float
         Wait after creating the publishers (discovery) [s].
+    wait_subscribers : int
+        Before playing, wait until every played topic has at least this many matched
+        subscriptions (up to ``wait_timeout_s``), so that a volatile subscriber started
+        beside the replay misses no message to discovery (0: do not wait).
+    wait_timeout_s : float
+        Longest wait for the subscribers [s]; then play anyway, with a warning.
     stop : threading.Event, optional
         Set to stop; SIGINT/SIGTERM set it when called from the main thread.
 
@@ -115,6 +122,16 @@ def replay(bag, *, rate: float = 1.0, loop: bool = False, topics=None, clock_rat
     sent = ticks = loops = 0
     try:
         stop.wait(delay_s)
+        if wait_subscribers > 0:
+            t_wait = time.monotonic() + wait_timeout_s
+            while not stop.is_set() and any(p.get_subscription_count() < wait_subscribers for p in pubs.values()):
+                if time.monotonic() > t_wait:
+                    missing = sorted(t for t, p in pubs.items() if p.get_subscription_count() < wait_subscribers)
+                    print(f"replay: warning: no {wait_subscribers} subscriber(s) on {missing} after "
+                          f"{wait_timeout_s:g} s; playing anyway", file=sys.stderr)
+                    break
+                stop.wait(0.05)
+            stop.wait(0.2)       # the subscriber side of the match completes shortly after ours
         while not stop.is_set():
             w0 = time.monotonic()
             next_clock = w0
@@ -152,6 +169,9 @@ def replay(bag, *, rate: float = 1.0, loop: bool = False, topics=None, clock_rat
             if not loop:
                 break
     finally:
+        from rclpy.duration import Duration
+        for pub in list(pubs.values()) + ([clock_pub] if clock_pub is not None else []):
+            pub.wait_for_all_acked(Duration(seconds=2.0))   # reliable: let the last messages arrive
         node.destroy_node()
         rclpy.shutdown(context=ctx)
     interrupted = stop.is_set()
@@ -170,7 +190,8 @@ def _stamp(ns: int):
 def cmd_replay(args) -> int:
     try:
         replay(args.bag, rate=args.rate, loop=args.loop, topics=args.topics, clock_rate=args.clock_rate,
-               delay_s=args.delay, progress=None if args.quiet else sys.stderr)
+               delay_s=args.delay, progress=None if args.quiet else sys.stderr,
+               wait_subscribers=args.wait_subscribers)
     except McapReadError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -187,5 +208,7 @@ def add_parser(sub) -> None:
     p.add_argument("--topics", nargs="+", help="topics to play (default: all but /clock)")
     p.add_argument("--clock-rate", type=float, default=50.0, help="/clock rate [Hz of wall time], 0 = off (default 50)")
     p.add_argument("--delay", type=float, default=1.0, help="wait before playing (discovery) [s] (default 1)")
+    p.add_argument("--wait-subscribers", type=int, default=0, metavar="N",
+                   help="wait (up to 15 s) until every played topic has N matched subscribers (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_replay)
