@@ -65,19 +65,22 @@ def test_config_uses_the_recorded_calibration(cfg):
 
 
 def test_micro_motion_models_give_close_trajectories(section4, cfg):
-    """Mobility, Method 1 and FDM: mean centre within 10 % of the tooth-tip clearance δ.
+    """Mobility, Method 1 and FDM: trajectories within 1 % of δ at every point of the cycle.
 
-    Why 10 % of δ: the three film models differ by 1.5–13 % in the film force for the
-    same eccentricity (docs/bearing.md), and here the outer gear rests against the inner
-    gear, so its excursion is bounded by δ rather than by the housing clearance c.
+    Why so close (the film models differ by 1.5–13 % in force for the same eccentricity,
+    docs/bearing.md): under the pressure load the outer gear rests on the inner gear at
+    almost every step (the sec. 3.7 overlap check binds), so the position is set by the
+    gear geometry and the film model only decides how fast it gets there.  Measured:
+    ≤ 0.03 µm.  The cycles start at the same shaft angle (``chamber_cycle``).
     """
     delta = cfg.clearances.tooth_tip_m
-    means = {m: section4["cycles"][m].eccentricity.mean(axis=0) for m in ("mobility", "short", "fdm")}
+    ref = section4["cycles"]["mobility"].eccentricity
     for m in ("short", "fdm"):
-        assert np.hypot(*(means[m] - means["mobility"])) < 0.1 * delta, (m, means)
-    for m in means:
         e = section4["cycles"][m].eccentricity
+        assert e.shape == ref.shape
+        assert np.hypot(*(e - ref).T).max() < 0.01 * delta, m
         assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
+    assert np.ptp(ref[:, 0]) > 0.1 * delta      # and the trajectory is not a point
 
 
 def test_trajectory_moves_opposite_ways_with_pressure_and_speed(cfg):
