@@ -119,3 +119,28 @@ def test_bad_rate_and_cli_errors(tmp_path, capsys):
     existing.write_bytes(b"x")
     assert main(["synth-bench", "--profile", "test", "-o", str(existing)]) == 2
     assert "--overwrite" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["bench_map.mcap", "bench_transient.mcap"])
+def test_bundled_bags_match_the_current_pump_config(cfg, name):
+    """The shipped recordings were made from today's config/pump.yaml (clearances × the
+    recorded factor): a recalibration or geometry change makes them stale — regenerate
+    them with the command stored in their metadata (bags/README.md)."""
+    import json
+    from pathlib import Path
+
+    import yaml
+
+    meta = metadata(Path(__file__).resolve().parent.parent / "bags" / name)[EMULATOR_METADATA]
+    factor = json.loads(meta["spec"])["clearance_factor"]
+    recorded = yaml.safe_load(meta["emulated_pump_config"])
+    expected = emulated_config(cfg, factor).to_dict()
+    def flat(d, prefix=""):
+        out = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {prefix + k: v})
+        return out
+
+    got, want = flat(recorded), flat(expected)
+    for key in [k for k in want if k.split(".")[0] in ("gears", "clearances", "ports", "fluid", "leakage")]:
+        assert got[key] == pytest.approx(want[key], rel=1e-9), (name, key, meta["command"])
