@@ -111,7 +111,7 @@ def test_outputs_physical_and_encodable(model, steady_run):
     assert np.all(np.diff(stamps) == 20 * MS)
     wf = of(msgs, "twin/chamber_waveform")[-1].msg
     assert [d["label"] for d in wf["layout"]["dim"]] == ["sample", "angle_p"]
-    table = np.array(wf["data"]).reshape(720, model.N + 1)
+    table = np.array(wf["data"]).reshape(core.settings.waveform_samples, model.N + 1)
     assert table[0, 0] == 0 and table[-1, 0] < 2 * math.pi
     assert table[:, 1:].max() > 0.9 * PD and table[:, 1:].min() < 2e5
 

@@ -51,15 +51,20 @@ BENCH_TOPICS = {
 #: Metadata record describing how a file was synthesized.
 EMULATOR_METADATA = "gerotor_twin.bench_emulator"
 SHAFT_JOINT = "pump_shaft"
+#: Output step of the emulated pump [deg]: finer than the twin's default (1°), so the
+#: "bench" is the better-resolved of the two.
+EMULATOR_MAX_STEP_DEG = 0.5
 
 
 def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
-    """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-]."""
+    """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-],
+    integrated at :data:`EMULATOR_MAX_STEP_DEG` (or finer, if the config asks for it)."""
     if not (math.isfinite(factor) and 0.5 <= factor <= 2.0):
         raise InputError("clearance_factor", factor, "[0.5, 2]")
     raw = config.to_dict()
     raw["clearances"]["tooth_tip_m"] *= factor
     raw["clearances"]["lateral_m"] *= factor
+    raw["numerics"]["max_step_deg"] = min(raw["numerics"]["max_step_deg"], EMULATOR_MAX_STEP_DEG)
     return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
 
 

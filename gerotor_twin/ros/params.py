@@ -55,7 +55,7 @@ PARAMETERS: tuple[Param, ...] = (
           0.001, 3600.0),
     Param("waveform_every", 1, "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",
           0, 10000),
-    Param("waveform_samples", 720, "shaft-angle samples of the waveform per revolution [-]", 8, 100000),
+    Param("waveform_samples", 360, "shaft-angle samples of the waveform per revolution [-]", 8, 100000),
     Param("log_dir", "", "directory of the MCAP log (one file per run); '' = no log"),
     Param("log_compression", "zstd", "MCAP chunk compression", choices=("zstd", "lz4", "none")),
     Param("log_waveforms", True, "also log twin/chamber_waveform to MCAP (large) [-]"),

@@ -57,7 +57,7 @@ class TwinSettings:
         (0 = never).  Default 1.
     waveform_samples : int
         Number of shaft-angle samples of the waveform over one revolution
-        (interpolated from the integration steps; 720 = 0.5°, the default step).
+        (interpolated from the integration steps; 360 = 1°, the default output step).
     error_report_period_s : float
         Rate limit of input-error events per (input, reason) [s]; counts are
         never rate-limited.  Default 1 s.
@@ -71,7 +71,7 @@ class TwinSettings:
     stamp_restart_s: float = 1.0
     negative_speed_tolerance_rad_s: float = 0.5
     waveform_every: int = 1
-    waveform_samples: int = 720
+    waveform_samples: int = 360
     error_report_period_s: float = 1.0
 
     def __post_init__(self) -> None:
