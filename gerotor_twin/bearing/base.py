@@ -114,6 +114,10 @@ class KernelBearing:
             raise InputError("geometry", geometry, "a BearingGeometry")
         self.geometry = geometry
 
+    def _film_args(self, e: Any, e_dot: Any, omega: Any) -> tuple[np.ndarray, np.ndarray, float]:
+        """Validated ``(e [m], e_dot [m/s], omega [rad/s])`` of a film-force call."""
+        return self._check_e(e), as_vector2("e_dot", e_dot), check_finite("omega", omega)
+
     def _check_e(self, e: Any) -> np.ndarray:
         v = as_vector2("e", e)
         c = self.geometry.clearance_m

@@ -47,10 +47,9 @@ import math
 import numpy as np
 
 from gerotor_twin._jit import njit
-from gerotor_twin.bearing.base import KernelBearing, as_vector2, cap_eccentricity
+from gerotor_twin.bearing.base import KernelBearing, cap_eccentricity
 from gerotor_twin.bearing.closed_form import short_bearing_force
 from gerotor_twin.bearing.geometry import BearingGeometry
-from gerotor_twin.errors import check_finite
 
 __all__ = ["MobilityBearing", "mobility_velocity", "mobility_kernel", "mobility_components"]
 
@@ -190,9 +189,7 @@ class MobilityBearing(KernelBearing):
         numpy.ndarray, shape (2,)
             Force on the journal [N].
         """
-        ev = self._check_e(e)
-        ed = as_vector2("e_dot", e_dot)
-        w = check_finite("omega", omega)
+        ev, ed, w = self._film_args(e, e_dot, omega)
         c, length, diameter, mu = self.params
         v = ed - 0.5 * w * np.array([-ev[1], ev[0]])  # squeeze velocity to reproduce
         vn = math.hypot(v[0], v[1])

@@ -52,10 +52,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from gerotor_twin._jit import njit
-from gerotor_twin.bearing.base import KernelBearing, as_vector2, cap_eccentricity
+from gerotor_twin.bearing.base import KernelBearing, cap_eccentricity
 from gerotor_twin.bearing.geometry import BearingGeometry
 from gerotor_twin.bearing.mobility import mobility_velocity
-from gerotor_twin.errors import InputError, check_finite
+from gerotor_twin.errors import InputError
 
 __all__ = ["FdmBearing", "FdGrid", "make_grid", "fd_fields", "fdm_velocity", "fdm_kernel",
            "parse_grid"]
@@ -383,9 +383,7 @@ class FdmBearing(KernelBearing):
         numpy.ndarray, shape (nx, ny)
             ``p[i, j]`` at ``(grid.x[i], grid.y[j])``; the edge columns are 0.
         """
-        ev = self._check_e(e)
-        ed = as_vector2("e_dot", e_dot)
-        w = check_finite("omega", omega)
+        ev, ed, w = self._film_args(e, e_dot, omega)
         p_w, p_x, p_y = self._fields(ev, w)
         p = np.zeros((self.grid.nx, self.grid.ny))
         p[:, 1:-1] = p_w + ed[0] * p_x + ed[1] * p_y
@@ -407,9 +405,7 @@ class FdmBearing(KernelBearing):
         -------
         numpy.ndarray, shape (2,)
         """
-        ev = self._check_e(e)
-        ed = as_vector2("e_dot", e_dot)
-        w = check_finite("omega", omega)
+        ev, ed, w = self._film_args(e, e_dot, omega)
         p_w, p_x, p_y = self._fields(ev, w)
         gr = self.grid
         f = _clipped_force(p_w, p_x, p_y, ed[0], ed[1], gr.cos_t, gr.sin_t, gr.dx * gr.dy)

@@ -42,10 +42,10 @@ import math
 import numpy as np
 
 from gerotor_twin._jit import njit
-from gerotor_twin.bearing.base import KernelBearing, as_vector2, cap_eccentricity
+from gerotor_twin.bearing.base import KernelBearing, cap_eccentricity
 from gerotor_twin.bearing.geometry import BearingGeometry
 from gerotor_twin.bearing.mobility import mobility_velocity
-from gerotor_twin.errors import InputError, check_finite
+from gerotor_twin.errors import InputError
 
 __all__ = ["ShortBearing", "pressure", "short_film_force", "short_velocity", "short_kernel"]
 
@@ -279,8 +279,6 @@ class ShortBearing(KernelBearing):
         -------
         numpy.ndarray, shape (2,)
         """
-        ev = self._check_e(e)
-        ed = as_vector2("e_dot", e_dot)
-        w = check_finite("omega", omega)
+        ev, ed, w = self._film_args(e, e_dot, omega)
         p = self.params
         return np.array(short_film_force(ev[0], ev[1], ed[0], ed[1], w, *p))
