@@ -1,4 +1,4 @@
-"""``gerotor-twin replay``: real processes on a private ROS_DOMAIN_ID (60-79 are this file's)."""
+"""``gerotor-twin replay``: real processes on a private ROS_DOMAIN_ID (claimed with gerotor_twin.ros.domain)."""
 import json
 import os
 import signal
@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from gerotor_twin.io import McapReadError
+from gerotor_twin.ros.domain import claim_domain
 from gerotor_twin.ros.replay import load_messages
 from report_helpers import write_bench
 
@@ -75,12 +76,13 @@ def test_load_messages_and_bad_topics(bag):
 
 def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
     out = tmp_path / "got.json"
-    sub = _start([sys.executable, "-c", SUBSCRIBER, str(out), "12"], 61)
+    dom = claim_domain()
+    sub = _start([sys.executable, "-c", SUBSCRIBER, str(out), "12"], dom)
     rep = None
     try:
         assert sub.stdout.readline().strip() == "ready"
         rep = _start([sys.executable, "-m", "gerotor_twin", "replay", str(bag), "--rate", "2", "--clock-rate", "40",
-                      "--delay", "0.5", "--wait-subscribers", "1"], 61)
+                      "--delay", "0.5", "--wait-subscribers", "1"], dom)
         _, err = rep.communicate(timeout=60)
         assert rep.returncode == 0, err
         assert "finished: 300 messages" in err
@@ -101,7 +103,7 @@ def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
 
 def test_sigterm_stops_a_looping_replay(bag):
     rep = _start([sys.executable, "-m", "gerotor_twin", "replay", str(bag), "--loop", "--rate", "5",
-                  "--delay", "0.2"], 62)
+                  "--delay", "0.2"], claim_domain())
     try:
         deadline = time.monotonic() + 60
         line = ""

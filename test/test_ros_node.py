@@ -14,6 +14,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from gerotor_twin.ros.domain import claim_domain  # noqa: E402
 from ros_peer import MS, Peer, kill_node, latest_diag, start_node, stop_node  # noqa: E402
 
 pytestmark = pytest.mark.slow
@@ -69,8 +70,9 @@ def test_node_predicts_offline_flow_and_sigterm_keeps_every_input(tmp_path, refe
     from gerotor_twin.config import load_config
     from rosbags.highlevel import AnyReader
     c = load_config().clearances.housing_radial_m
-    proc = start_node(151, tmp_path)
-    peer = Peer(151)
+    d = claim_domain()
+    proc = start_node(d, tmp_path)
+    peer = Peer(d)
     try:
         peer.wait_matched(proc=proc)
         feed_until_outputs(peer, proc)
@@ -118,8 +120,9 @@ def test_node_predicts_offline_flow_and_sigterm_keeps_every_input(tmp_path, refe
 
 def test_sim_time_coarse_clock_same_mean_flow(tmp_path, reference_flow):
     """/clock at 40 Hz, then at 1 kHz: same revolution-mean flow (the node integrates the real Δt)."""
-    proc = start_node(152, tmp_path, "use_sim_time:=true")
-    peer = Peer(152, clock=True)
+    d = claim_domain()
+    proc = start_node(d, tmp_path, "use_sim_time:=true")
+    peer = Peer(d, clock=True)
     sim = [10 * 1_000_000_000]
     try:
         peer.wait_matched(proc=proc)
@@ -155,7 +158,8 @@ def test_sim_time_coarse_clock_same_mean_flow(tmp_path, reference_flow):
 def test_bad_parameters_refused(tmp_path):
     for param, needle in (("bearing_model:=foo", "mobility | short | fdm | fixed"),
                           ("tick_rate_hz:=5000.0", "tick_rate_hz")):
-        proc = start_node(153, tmp_path, param)
+        d = claim_domain()
+        proc = start_node(d, tmp_path, param)
         try:
             code = proc.wait(60)
         finally:
@@ -200,8 +204,9 @@ class Bench:
 @pytest.fixture(scope="module")
 def bad_node(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("bad")
-    proc = start_node(154, tmp, "use_sim_time:=true", "stale_timeout_s:=0.5")
-    peer = Peer(154, clock=True)
+    d = claim_domain()
+    proc = start_node(d, tmp, "use_sim_time:=true", "stale_timeout_s:=0.5")
+    peer = Peer(d, clock=True)
     bench = None
     try:
         peer.wait_matched(proc=proc)

@@ -84,9 +84,6 @@ def test_progress_bar_has_eta(bench_bytes, tmp_path):
     assert "100.0 %" in err.getvalue() and "run-bag" in err.getvalue()
 
 
-NODE_DOMAIN = 63
-
-
 def test_node_and_run_bag_agree(tmp_path):
     """The node fed by ``replay`` (use_sim_time, /clock 50 Hz) and run-bag predict the same mean flow.
 
@@ -104,7 +101,8 @@ def test_node_and_run_bag_agree(tmp_path):
     root = Path(__file__).resolve().parent.parent
     bag = tmp_path / "bench.mcap"
     synthesize(Profile("steady", (Segment(4.0, 2000, 15),)), bag, BenchSpec(bearing="fixed"), progress=None)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(NODE_DOMAIN))
+    from gerotor_twin.ros.domain import claim_domain
+    env = dict(os.environ, ROS_DOMAIN_ID=str(claim_domain()))
     logs = tmp_path / "log"
     node = subprocess.Popen([sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
                              str(root / "config" / "twin.yaml"), "-p", "use_sim_time:=true", "-p", f"log_dir:={logs}",

@@ -26,7 +26,18 @@ from pathlib import Path
 
 __all__ = ["cmd_bench_node", "run"]
 
-_DOMAIN = 197
+
+
+def _domain() -> int:
+    """This run's private ROS_DOMAIN_ID (claimed once, held until exit)."""
+    global _DOMAIN
+    if _DOMAIN is None:
+        from gerotor_twin.ros.domain import claim_domain
+        _DOMAIN = claim_domain()
+    return _DOMAIN
+
+
+_DOMAIN: int | None = None
 
 
 def _cpu_s(pid: int) -> float:
@@ -40,7 +51,7 @@ def _start(tmp: Path, model: str, log_name: str) -> tuple[subprocess.Popen, floa
     log = tmp / log_name
     args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
             str(root / "config" / "twin.yaml"), "-p", f"log_dir:={tmp}", "-p", f"bearing_model:={model}"]
-    env = dict(os.environ, ROS_DOMAIN_ID=str(_DOMAIN), PYTHONUNBUFFERED="1")
+    env = dict(os.environ, ROS_DOMAIN_ID=str(_domain()), PYTHONUNBUFFERED="1")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
     t0 = time.monotonic()
     proc = subprocess.Popen(args, stdout=open(log, "w"), stderr=subprocess.STDOUT, env=env,
@@ -90,7 +101,7 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
 
         proc, _, log = _start(tmp, model, "run.log")
         ctx = rclpy.Context()
-        rclpy.init(context=ctx, domain_id=_DOMAIN)
+        rclpy.init(context=ctx, domain_id=_domain())
         node = rclpy.create_node("bench_node_peer", context=ctx)
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
         pub_w = node.create_publisher(JointState, "bench/shaft_speed", qos)

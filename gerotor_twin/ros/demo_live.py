@@ -44,9 +44,14 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "out" / "demo"))
     ap.add_argument("--model", default="mobility")
     ap.add_argument("--rate", type=float, default=1.0)
-    ap.add_argument("--domain-id", type=int, default=int(os.environ.get("GEROTOR_TWIN_DEMO_DOMAIN", "77")))
+    ap.add_argument("--domain-id", type=int, default=None,
+                    help="ROS_DOMAIN_ID (default: a free one in 0-101, or $GEROTOR_TWIN_DEMO_DOMAIN)")
     ap.add_argument("--verbose", action="store_true", help="echo the node's log lines")
     args = ap.parse_args(argv)
+    if args.domain_id is None:
+        from gerotor_twin.ros.domain import claim_domain
+        env_id = os.environ.get("GEROTOR_TWIN_DEMO_DOMAIN")
+        args.domain_id = int(env_id) if env_id else claim_domain()
     out = Path(args.out)
     log_dir = out / "log"
     log_dir.mkdir(parents=True, exist_ok=True)
