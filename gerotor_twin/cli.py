@@ -146,6 +146,14 @@ def cmd_demo(args) -> int:
 
 
 # -------------------------------------------------------------------- bench
+def _floats(text: str, name: str) -> tuple[float, ...]:
+    try:
+        vals = tuple(float(v) for v in str(text).split(","))
+    except ValueError:
+        raise InputError(name, text, "comma-separated numbers") from None
+    return vals
+
+
 def cmd_bench(args) -> int:
     from .config import load_config
     from .model.bench import realtime
@@ -156,6 +164,13 @@ def cmd_bench(args) -> int:
                         repeats=args.repeats)
         if args.json:
             _write_json(args.json, {"realtime": rows})
+    elif args.what == "accuracy":
+        from .model.accuracy import print_accuracy
+        rows = print_accuracy(cfg, rpms=_floats(args.rpm, "--rpm"), bars=_floats(args.bar, "--bar"),
+                              models=tuple((args.models or "mobility").split(",")))
+        if args.json:
+            _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
+        return 0 if all(r["within_budget"] for r in rows) else 1
     elif args.what == "models":
         from .model.bench import models_cost
         rows = models_cost(cfg, models=tuple((args.models or "fixed,mobility,short,fdm").split(",")),
@@ -194,9 +209,12 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
-    b.add_argument("what", choices=("realtime", "models"),
+    b.add_argument("what", choices=("realtime", "accuracy", "models"),
                    help="realtime: model real-time factor at 1000/2000/3000 rpm; "
+                        "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
+    b.add_argument("--rpm", default="3000", help="accuracy: shaft speed(s) [rpm], comma-separated")
+    b.add_argument("--bar", default="27.5", help="accuracy: delivery pressure(s) [bar gauge], comma-separated")
     b.add_argument("--models", help="comma-separated outer-gear models "
                                      "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")

@@ -12,7 +12,7 @@ import pytest
 from gerotor_twin.geometry.chambers import chamber_area
 from gerotor_twin.geometry.gaps import exact_gaps
 from gerotor_twin.geometry.ports import open_area
-from gerotor_twin.model import kernel as K
+from gerotor_twin.model import contact as C
 
 RNG = np.random.default_rng(7)
 
@@ -43,8 +43,8 @@ def test_gap_expansion_matches_exact_geometry(fixed_model):
         exact = exact_gaps(g, t, (ex, ey), gam, with_le=False).h
         coef = np.empty(9)
         for k in range(g.chambers):
-            K._gap_coeffs(m.tables.data, m.tables.period, m.tables.shift, k, t, coef)
-            approx = K._gap_value(coef, g.tip_clearance, ex, ey, gam)
+            C.gap_coefficients(m.kernel.tab, t, k, coef)
+            approx = C.gap_value(coef, g.tip_clearance, ex, ey, gam)
             worst = max(worst, abs(approx - exact[k]))
     # stated tolerance: 0.3 µm (1 % of the 30 µm tip clearance) for |e| <= c and |γ| <= 2 mrad;
     # the remainder is third order in (e, γ)
@@ -66,11 +66,10 @@ def test_contact_check_leaves_one_contact(fixed_model):
     """Sec. 3.7: after the overlap check exactly one gap is closed and none overlaps."""
     m = fixed_model
     g = m.geometry
-    coef = np.empty(9)
+    cmat = np.empty((g.chambers, 9))
     h = np.empty(g.chambers)
     for e in ((0.0, 0.0), (40e-6, -10e-6), (-5e-6, 3e-6)):
-        ex, ey, gam, kc = K.contact(m.tables.data, m.tables.period, m.tables.shift, g.chambers, g.tip_clearance,
-                                    0.7, e[0], e[1], h, coef)
+        ex, ey, gam, kc = C.contact(m.kernel.tab, g.chambers, g.tip_clearance, 0.7, e[0], e[1], h, cmat)
         assert h.min() >= 0 and h[kc] < 1e-10
         assert np.sum(h < 1e-9) == 1
         exact = exact_gaps(g, 0.7, (ex, ey), gam, with_le=False).h

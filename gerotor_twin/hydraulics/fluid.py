@@ -196,7 +196,7 @@ class Fluid:
 # ==========================================================================
 # Kernels
 # ==========================================================================
-@njit
+@njit(inline="always")
 def bulk_modulus(p, beta_star, ratio, p_atm, band, p_vap):
     r"""Bulk modulus β(p) of Eq. (23) of [1], C¹-smoothed, with a vapour floor.
 

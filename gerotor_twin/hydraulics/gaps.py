@@ -101,7 +101,7 @@ def slot_flow(dp, h, width, length, mu):
     return g * dp, g
 
 
-@njit
+@njit(inline="always")
 def tooth_tip_flow(dp, h, le, v_r, width, mu):
     r"""Leakage through one tooth-tip gap: Poiseuille + Couette, Eq. (22) of [1].
 

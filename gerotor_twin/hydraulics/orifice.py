@@ -93,7 +93,7 @@ def discharge_coefficient(flow_number, cd_max, lambda_crit):
     return cd_max * math.tanh(2.0 * abs(flow_number) / lambda_crit)
 
 
-@njit
+@njit(inline="always")
 def orifice_flow(dp, area, cd_max, lambda_crit, rho, mu):
     r"""Flow through an orifice, Eq. (21) of [1], with Cd(λ) and its derivative.
 
@@ -154,12 +154,13 @@ def orifice_flow(dp, area, cd_max, lambda_crit, rho, mu):
     a = 2.0 * d_h * r / (m * lc)          # = 2 D_h / (ν λ_crit)  [s/m]
     v = math.sqrt(2.0 / r) * math.sqrt(adp)  # ideal jet velocity [m/s]
     z = a * v                              # = 2 λ / λ_crit [-]
-    t = math.tanh(z)
+    em = math.expm1(-2.0 * z)              # z ≥ 0: no overflow; one call gives tanh and sech²
+    e = 1.0 + em
+    t = -em / (2.0 + em)                   # tanh z = (1 − e)/(1 + e), no cancellation
     if z < ORIFICE_SERIES_SWITCH:
         z2 = z * z
         bracket = 2.0 + z2 * (-4.0 / 3.0 + z2 * (4.0 / 5.0 - z2 * (136.0 / 315.0)))
     else:
-        e = math.exp(-2.0 * z)             # z > 0: no overflow
         sech2 = 4.0 * e / ((1.0 + e) * (1.0 + e))
         bracket = t / z + sech2
     q = cd_max * area * v * t

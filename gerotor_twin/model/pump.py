@@ -19,9 +19,10 @@ from ..config import PumpConfig
 from ..errors import InputError, check_finite
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
-from ..hydraulics.fluid import log_density
-from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
+from ..hydraulics.state_equation import log_density_of
 from . import kernel as K
+from .contact import contact
+from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, N_FLOWS, kernel_model, operating, workspace
 
 __all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
 
@@ -56,8 +57,9 @@ class PumpState:
     pressures: np.ndarray       #: (N+1,) the matching absolute pressures [Pa] (derived, for callers)
     eccentricity: np.ndarray    #: (2,) outer-gear centre displacement [m]
     counters: np.ndarray = field(default_factory=lambda: np.zeros(K.N_COUNTERS, dtype=np.int64))
-    volumes: np.ndarray = field(default_factory=lambda: np.zeros(8))  #: ∫ flows [m³], last sub-step [s], port masses/ρ₀ [m³]
+    volumes: np.ndarray = field(default_factory=lambda: np.zeros(N_FLOWS))  #: ∫ flow dt per FL_* index [m³]
     swept_angle: float = 0.0    #: ∫ω dt since start [rad]
+    substep: float = 0.0        #: proposed ROS2 sub-step for the next call [s] (0: the output step)
 
     @property
     def counts(self) -> dict:
@@ -117,27 +119,6 @@ class Outputs:
         return out
 
 
-def _eos_args(f) -> tuple:
-    """(β*, ratio, p_atm, band, p_vap): the argument order of the fluid kernels."""
-    return (f.bulk_modulus_pa, f.cavitation_ratio, f.atmospheric_pa, f.switch_band_pa, f.vapour_pressure_pa)
-
-
-def _band_inverse(prm, fluid) -> np.ndarray:
-    """Pressures at BAND_NODES log-densities spread uniformly over the switch band (root finding)."""
-    from scipy.optimize import brentq
-    fp = _eos_args(fluid)
-    s_nodes = np.linspace(prm[K.P_SLO], prm[K.P_SHI], K.BAND_NODES)
-    out = np.empty(K.BAND_NODES)
-    for i, sv in enumerate(s_nodes):
-        if i == 0:
-            out[i] = prm[K.P_PLO]
-        elif i == K.BAND_NODES - 1:
-            out[i] = prm[K.P_PHI]
-        else:
-            out[i] = brentq(lambda p: log_density(p, *fp) - sv, prm[K.P_PLO], prm[K.P_PHI], xtol=1e-10)
-    return out
-
-
 class PumpModel:
     """Lumped-parameter Gerotor pump (sec. 3 of [1]) with a choice of outer-gear model.
 
@@ -167,47 +148,11 @@ class PumpModel:
         self.bearing_geometry = BearingGeometry(length_m=g.width, diameter_m=2 * g.outer_radius,
                                                 clearance_m=config.clearances.housing_radial_m,
                                                 viscosity_pa_s=config.fluid.viscosity_pa_s)
-        self.bearing = None
-        if bearing in ("short", "fdm"):
-            self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
+        self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
         self.displacement = g.displacement_closed_form()   # ideal profiles; δ does not enter
-        self.params = self._kernel_params()
-
-    # ------------------------------------------------------------ parameters
-    def _kernel_params(self) -> np.ndarray:
-        c, f, lat = self.config, self.config.fluid, self.lateral
-        mu = f.viscosity_pa_s
-        h = c.clearances.lateral_m
-        prm = np.zeros(K.N_PARAMS + K.BAND_NODES)
-        prm[:7] = f.kernel_params()
-        prm[K.P_N] = self.N
-        prm[K.P_WIDTH] = self.geometry.width
-        prm[K.P_DELTA] = self.geometry.tip_clearance
-        prm[K.P_DH] = c.tip_dh
-        prm[K.P_CD] = c.orifice.cd_max
-        prm[K.P_LAMBDA] = c.orifice.lambda_crit
-        two_faces = 2.0
-        # conductances [m³/(s·Pa)] = flow at Δp = 1 Pa
-        prm[K.P_GLAT] = two_faces * sector_circumferential_flow(1.0, h, lat.chi_lobe, lat.lobe_r_in,
-                                                                lat.lobe_r_out, mu)[0]
-        prm[K.P_GSD] = two_faces * (sector_circumferential_flow(1.0, h, lat.chi1, lat.ring_r_in, lat.ring_r_out, mu)[0]
-                                    + sector_circumferential_flow(1.0, h, lat.chi2, lat.ring_r_in,
-                                                                  lat.ring_r_out, mu)[0])
-        prm[K.P_GDR] = two_faces * sector_radial_flow(1.0, h, lat.chi3, lat.drain_r_in, lat.drain_r_out, mu)[0]
-        prm[K.P_C] = c.clearances.housing_radial_m
-        prm[K.P_RJ] = self.geometry.outer_radius
-        prm[K.P_MODE] = 1.0 if c.boundary.mode == "restriction" else 0.0
-        prm[K.P_VLINE] = c.boundary.delivery_volume_m3
-        prm[K.P_AREST] = c.boundary.restriction_area_m2
-        prm[K.P_PTANK] = f.atmospheric_pa
-        prm[K.P_EPSMAX] = 0.95
-        prm[K.P_PHI] = f.atmospheric_pa + 0.5 * f.switch_band_pa
-        prm[K.P_PLO] = f.atmospheric_pa - 0.5 * f.switch_band_pa
-        prm[K.P_SHI] = log_density(prm[K.P_PHI], *_eos_args(f))
-        prm[K.P_SLO] = log_density(prm[K.P_PLO], *_eos_args(f))
-        prm[K.P_ATOL] = c.numerics.tolerance
-        prm[K.N_PARAMS:] = _band_inverse(prm, f)
-        return prm
+        self.kernel = kernel_model(config, self.tables, self.lateral)
+        self._ws = workspace(self.N)
+        self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
 
     @property
     def restriction_mode(self) -> bool:
@@ -244,7 +189,7 @@ class PumpModel:
         for j in range(self.N):        # chambers open to the delivery port start at its pressure
             if self.tables.column("AD", theta, j) > 0:
                 p[j] = p[self.N]
-        y = np.array([K.log_density_of(v, self.params) for v in p])
+        y = np.array([log_density_of(v, self.kernel.eos) for v in p])
         return PumpState(t=t, theta=theta, log_density=y, pressures=p, eccentricity=np.zeros(2))
 
     def step_size(self, omega: float) -> float:
@@ -285,64 +230,41 @@ class PumpModel:
         rec = np.zeros((n, K.N_REC))
         rec_p = np.zeros((n, self.N))
         rec_g = np.zeros((n, self.N))
-        tab = self.tables
+        op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery)
         if not self.restriction_mode:
-            y[self.N] = K.log_density_of(inputs.p_delivery, self.params)
+            y[self.N] = op.s_d
         theta, t = state.theta, state.t
+        ws = self._ws
+        ws.ctrl[K.CT_SUBSTEP] = state.substep
         if n:
-            if self.bearing is None:
-                kind = K.BEARING_MOBILITY if self.bearing_name == "mobility" else K.BEARING_FIXED
-                theta, t = K.integrate(y, e, theta, t, inputs.omega, inputs.p_suction, inputs.p_delivery, n, h,
-                                       tab.data, tab.period, tab.shift, self.params, kind,
-                                       rec, rec_p, rec_g, counters, vols)
+            if self._move == K.MOVE_EXTERNAL:
+                theta, t = K.integrate_external(self, y, e, theta, t, n, h, op, rec, rec_p, rec_g, counters, vols)
             else:
-                theta, t = self._integrate_external(y, e, theta, t, inputs, n, h, rec, rec_p, rec_g,
-                                                    counters, vols)
+                theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_g, counters, vols,
+                                       self._move)
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
             raise FloatingPointError("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
         pres = np.empty_like(y)
-        K.to_pressures(y, self.params, pres)
+        K.to_pressures(y, self.kernel, pres)
         new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
-                        volumes=vols, swept_angle=swept)
+                        volumes=vols, swept_angle=swept,
+                        substep=float(ws.ctrl[K.CT_SUBSTEP]))
         return new, self._outputs(rec, rec_p, rec_g, inputs, vols - state.volumes, dt)
 
-    def _integrate_external(self, y, e, theta, t, inputs, n, h, rec, rec_p, rec_g, counters, vols):
-        """Python-level loop for the slow bearing models (short, FDM): same kernels, per step."""
-        tab, prm, N = self.tables, self.params, self.N
-        omega2 = inputs.omega * (N - 1) / N
-        coef = np.empty(9)
-        gaps = np.empty(N)
-        pres = np.empty(N + 1)
-        c = prm[K.P_C]
-        for i in range(n):
-            theta, t = K.integrate(y, e, theta, t, inputs.omega, inputs.p_suction, inputs.p_delivery, 1, h,
-                                   tab.data, tab.period, tab.shift, prm, K.BEARING_EXTERNAL,
-                                   rec[i:i + 1], rec_p[i:i + 1], rec_g[i:i + 1], counters, vols)
-            kc = int(rec[i, K.R_KC])
-            K.to_pressures(y, prm, pres)
-            f1 = K.outer_gear_load(pres, theta, inputs.omega, e[0], e[1], kc, tab.data, tab.period, tab.shift, prm)
-            d1 = self.bearing.velocity(e.copy(), np.array(f1[:2]), omega2)
-            px, py, _, kc2 = K.contact(tab.data, tab.period, tab.shift, N, prm[K.P_DELTA], theta,
-                                       e[0] + h * d1[0], e[1] + h * d1[1], gaps, coef)
-            f2 = K.outer_gear_load(pres, theta, inputs.omega, px, py, kc2, tab.data, tab.period, tab.shift, prm)
-            d2 = self.bearing.velocity(np.array([px, py]), np.array(f2[:2]), omega2)
-            ex, ey = e + 0.5 * h * (d1 + d2)
-            en = math.hypot(ex, ey)
-            if en > prm[K.P_EPSMAX] * c:
-                ex, ey = ex * prm[K.P_EPSMAX] * c / en, ey * prm[K.P_EPSMAX] * c / en
-                counters[K.C_HOUSING_CONTACT] += 1
-            ex, ey, gam, kc = K.contact(tab.data, tab.period, tab.shift, N, prm[K.P_DELTA], theta, ex, ey, gaps, coef)
-            e[0], e[1] = ex, ey
-            rec[i, K.R_EX], rec[i, K.R_EY], rec[i, K.R_GAMMA], rec[i, K.R_KC] = ex, ey, gam, kc
-            rec[i, K.R_FX], rec[i, K.R_FY] = f1[0], f1[1]
-            rec[i, K.R_MIN_GAP] = gaps.min()
-            rec_g[i] = gaps
-        return theta, t
+    def gaps(self, theta: float, e) -> tuple[np.ndarray, float, int]:
+        """Tooth-tip gaps [m] at shaft angle θ [rad] for an outer-gear displacement e [m] (sec. 3.7 rule).
+
+        Returns the N gap heights, the inner-gear rotation γ [rad] and the lobe in contact.
+        """
+        h = np.empty(self.N)
+        _ex, _ey, gam, kc = contact(self.kernel.tab, self.N, self.geometry.tip_clearance, float(theta),
+                                    float(e[0]), float(e[1]), h, np.empty((self.N, 9)))
+        return h, gam, kc
 
     def _outputs(self, rec, rec_p, rec_g, inputs: Inputs, dvol, dt) -> Outputs:
         qth = self.theoretical_flow(inputs.omega)
-        eta = float(dvol[0] / (qth * dt)) if qth > 0 and dt > 0 else float("nan")
+        eta = float(dvol[FL_DELIVERY] / (qth * dt)) if qth > 0 and dt > 0 else float("nan")
         return Outputs(
             t=rec[:, K.R_T], theta=rec[:, K.R_THETA], chamber_pressures=rec_p,
             delivery_pressure=rec[:, K.R_PD], delivery_flow=rec[:, K.R_QDEL], suction_flow=rec[:, K.R_QSUC],
@@ -350,4 +272,4 @@ class PumpModel:
             restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, [K.R_EX, K.R_EY]],
             load=rec[:, [K.R_FX, K.R_FY]], gaps=rec_g, inner_rotation=rec[:, K.R_GAMMA],
             contact_lobe=rec[:, K.R_KC].astype(int), theoretical_flow=qth, volumetric_efficiency=eta,
-            port_mass_in=float(dvol[6]), port_mass_out=float(dvol[7]))
+            port_mass_in=float(dvol[FL_MASS_IN]), port_mass_out=float(dvol[FL_MASS_OUT]))

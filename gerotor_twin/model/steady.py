@@ -54,9 +54,12 @@ class SteadyResult:
         }
 
 
-def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25):
-    """The same pump with tight solver settings (the reference mode of the tests)."""
-    return replace(cfg, numerics=replace(cfg.numerics, tolerance=tolerance, max_step_deg=max_step_deg))
+def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, max_step_s: float | None = None):
+    """The same pump with tight solver settings: ``tolerance`` on ln(ρ/ρ₀) everywhere (the reference mode)."""
+    n = cfg.numerics
+    return replace(cfg, numerics=replace(n, tolerance=tolerance, max_step_deg=max_step_deg,
+                                         max_step_s=n.max_step_s if max_step_s is None else max_step_s,
+                                         error_measure="log_density"))
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,

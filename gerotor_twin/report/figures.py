@@ -197,11 +197,10 @@ def gap_profile(tw: TwinData, p: Plateau, config, angles: np.ndarray) -> np.ndar
     The twin logs the eccentricity at its publish rate; each sample's angle within the
     revolution comes from the revolution stamps (:func:`revolution_phase`).  The samples of
     the plateau are folded onto one revolution and averaged in 10° bins, and the gaps are
-    computed from the pump geometry (``K.contact``: the same overlap check as the model)
-    at that angle and displacement.
+    computed from the pump geometry (:meth:`PumpModel.gaps`: the same overlap check as the
+    model) at that angle and displacement.
     """
-    from gerotor_twin.geometry.tables import cached_tables
-    from gerotor_twin.model import kernel as K
+    from gerotor_twin.model.pump import PumpModel
 
     if tw.eccentricity is None:
         return None
@@ -223,16 +222,12 @@ def gap_profile(tw: TwinData, p: Plateau, config, angles: np.ndarray) -> np.ndar
         good = cnt > 0
         fold[good, j] = ssum[good] / cnt[good]
         fold[~good, j] = np.interp(centres[~good], centres[good], fold[good, j], period=2 * math.pi)
-    g = config.gears
-    tab = cached_tables(g, config.suction_port, config.delivery_port, config.numerics.table_points)
-    out = np.empty((angles.size, g.chambers))
-    h = np.empty(g.chambers)
-    coef = np.empty(9)
+    pump = PumpModel(config, "fixed")
+    out = np.empty((angles.size, pump.N))
     for i, a in enumerate(angles):
         ex[0] = np.interp(a, centres, fold[:, 0], period=2 * math.pi)
         ex[1] = np.interp(a, centres, fold[:, 1], period=2 * math.pi)
-        K.contact(tab.data, tab.period, tab.shift, g.chambers, g.tip_clearance, float(a), ex[0], ex[1], h, coef)
-        out[i] = h
+        out[i] = pump.gaps(float(a), ex)[0]
     return out
 
 

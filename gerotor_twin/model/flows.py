@@ -1,0 +1,210 @@
+"""Right-hand side of the chamber-pressure ODE: port, tooth-tip and leakage flows.
+
+State y (length N+1): the log-densities y = ln(ρ/ρ₀) of the N chambers and of
+the delivery volume.  Mass conservation per volume, d(ρV)/dt = Σ ρ_up Q, gives
+
+.. math::
+    \\frac{dy_j}{dt} = \\frac{1}{V_j}\\Big(\\sum_i \\frac{\\rho_{up,i}}{\\rho_j} Q_i
+        - \\omega \\frac{dV_j}{d\\theta}\\Big)
+
+which is Eq. (20) of [1] (corrected: dp/dθ = β/(Vω)(ΣQ − ω dV/dθ); the
+printed 1/ω_int is not dimensionally right) multiplied through by 1/β, since
+dp = β dy.  Q_i are volume flows at upstream conditions; the density ratios
+(at most 0.2 % here) make the mass balance close exactly.  ∂f/∂y is assembled
+alongside: ∂Q/∂p · β(p) / V, without the derivatives of the density ratios
+(ROS2 is second order for any approximation of the Jacobian).
+
+The parts, each a function of its own: :func:`chamber_geometry` (table rows of
+every chamber), :func:`volume_states` (p, β, ρ of every volume),
+:func:`port_flows` (Eq. (21)), :func:`tip_flows` (Eq. (22) and sec. 3.2),
+:func:`line_flows` (sec. 3.3, 3.4 and the delivery restriction of sec. 4),
+:func:`assemble` and :func:`rhs`.
+
+References
+----------
+.. [1] The paper, sec. 3 (``../shared/paper``).
+"""
+from __future__ import annotations
+
+import math
+
+from .._jit import njit
+from ..geometry.tables import AD, AS, DV, KREL, V, VR
+from ..hydraulics.gaps import tooth_tip_flow
+from ..hydraulics.orifice import orifice_flow
+from ..hydraulics.state_equation import bulk_modulus_of, pressure_of
+from .contact import column, locate
+from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
+                     FL_SUCTION_DELIVERY)
+
+__all__ = ["rhs", "chamber_geometry", "volume_states", "port_flows", "tip_flows", "line_flows", "assemble",
+           "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR"]
+
+G_V, G_DV, G_AS, G_AD, G_KREL, G_VR = range(6)     # columns of Workspace.geo
+
+
+@njit(inline="always")
+def chamber_geometry(theta, tab, n, geo):
+    """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``."""
+    for j in range(n):
+        i0, i1, f = locate(tab, theta + j * tab.shift)
+        geo[j, G_V] = column(tab, V, i0, i1, f)
+        geo[j, G_DV] = column(tab, DV, i0, i1, f)
+        geo[j, G_AS] = column(tab, AS, i0, i1, f)
+        geo[j, G_AD] = column(tab, AD, i0, i1, f)
+        geo[j, G_KREL] = column(tab, KREL, i0, i1, f)
+        geo[j, G_VR] = column(tab, VR, i0, i1, f)
+
+
+@njit(inline="always")
+def volume_states(y, km, op, ws):
+    """Pressure [Pa], bulk modulus [Pa] and ρ/ρ₀ of every volume from the log-densities."""
+    n = km.pc.n
+    for i in range(n + 1):
+        if i == n and not km.pc.restriction:
+            s = op.s_d                                   # imposed delivery pressure
+            ws.p[i] = op.p_d
+        else:
+            s = y[i]
+            ws.p[i] = pressure_of(s, km.eos)
+        ws.beta[i] = bulk_modulus_of(ws.p[i], km.eos)
+        ws.rho[i] = math.exp(s)
+        ws.acc[i] = 0.0
+
+
+@njit(inline="always")
+def port_flows(km, op, ws, jac, want_jac):
+    """Suction and delivery port → chamber flows, Eq. (21) of [1] with Cd(λ)."""
+    pc = km.pc
+    n = pc.n
+    p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
+    pd, rd = p[n], rho[n]
+    for j in range(n):
+        pj, rj = p[j], rho[j]
+        q, dq = orifice_flow(op.p_s - pj, geo[j, G_AS], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        acc[j] += (op.rho_s / rj if q > 0.0 else 1.0) * q
+        fl[FL_SUCTION] += q
+        fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rj) * q
+        if want_jac:
+            jac[j, j] -= (op.rho_s / rj if q > 0.0 else 1.0) * dq * beta[j]
+        q, dq = orifice_flow(pd - pj, geo[j, G_AD], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)    # Eq. (21)
+        fl[FL_MASS_OUT] -= (rd if q > 0.0 else rj) * q
+        if q > 0.0:
+            acc[j] += rd / rj * q
+            acc[n] -= q
+            fl[FL_DELIVERY] -= q
+        else:
+            acc[j] += q
+            acc[n] -= rj / rd * q
+            fl[FL_DELIVERY] -= rj / rd * q
+        if want_jac:
+            jac[j, j] -= dq * beta[j]
+            jac[n, j] += dq * beta[j]
+            jac[j, n] += dq * beta[n]
+            jac[n, n] -= dq * beta[n]
+
+
+@njit(inline="always")
+def tip_flows(gaps, km, op, ws, jac, want_jac):
+    """Chamber j−1 → chamber j across lobe j: tooth-tip gap (Eq. (22) of [1]) + lateral land (sec. 3.2).
+
+    The lateral leakage across the lobe land does not depend on the micro-motion, as in [1].
+    """
+    pc = km.pc
+    n = pc.n
+    p, beta, rho, acc, geo = ws.p, ws.beta, ws.rho, ws.acc, ws.geo
+    for j in range(n):
+        jm = (j - 1) % n
+        q = 0.0
+        dq = 0.0
+        hk = gaps[j]
+        if hk > 0.0:
+            le = 2.0 * math.sqrt(2.0 * hk * pc.tip_dh / geo[j, G_KREL])       # osculating-circle length
+            q, dq = tooth_tip_flow(p[jm] - p[j], hk, le, op.omega * geo[j, G_VR], pc.width, pc.viscosity)  # Eq. (22)
+        q += pc.g_lateral * (p[jm] - p[j])                                   # sec. 3.2
+        dq += pc.g_lateral
+        if q > 0.0:
+            acc[j] += rho[jm] / rho[j] * q
+            acc[jm] -= q
+        else:
+            acc[j] += q
+            acc[jm] -= rho[j] / rho[jm] * q
+        if want_jac:
+            jac[j, jm] += dq * beta[jm]
+            jac[j, j] -= dq * beta[j]
+            jac[jm, jm] -= dq * beta[jm]
+            jac[jm, j] += dq * beta[j]
+
+
+@njit(inline="always")
+def line_flows(km, op, ws, jac, want_jac):
+    """Suction–delivery (sec. 3.3) and drain (sec. 3.4) leakages and the delivery restriction (sec. 4)."""
+    pc = km.pc
+    n = pc.n
+    dp = ws.p[n] - op.p_s
+    q_sd = pc.g_suction_delivery * dp
+    q_dr = pc.g_drain * dp
+    ws.acc[n] -= q_sd + q_dr
+    ws.flows[FL_SUCTION_DELIVERY] = q_sd
+    ws.flows[FL_DRAIN] = q_dr
+    ws.flows[FL_DELIVERY] -= q_sd + q_dr
+    if pc.restriction:
+        q, dq = orifice_flow(ws.p[n] - pc.p_tank, pc.restriction_area, pc.cd_max, pc.lambda_crit, pc.density,
+                             pc.viscosity)
+        ws.acc[n] -= q
+        ws.flows[FL_RESTRICTION] = q
+        if want_jac:
+            jac[n, n] -= (pc.g_suction_delivery + pc.g_drain + dq) * ws.beta[n]
+
+
+@njit(inline="always")
+def assemble(km, op, ws, f, jac, want_jac):
+    """dy/dt = (Σ ρ-weighted Q − ω dV/dθ) / V into ``f``; the Jacobian rows divided by the volumes."""
+    n = km.pc.n
+    n1 = n + 1
+    for j in range(n):
+        vol = ws.geo[j, G_V]
+        f[j] = (ws.acc[j] - op.omega * ws.geo[j, G_DV]) / vol
+        if want_jac:
+            for k in range(n1):
+                jac[j, k] /= vol
+    if km.pc.restriction:
+        f[n] = ws.acc[n] / km.pc.line_volume
+        if want_jac:
+            for k in range(n1):
+                jac[n, k] /= km.pc.line_volume
+    else:
+        f[n] = 0.0                                   # imposed delivery pressure: not a state
+        if want_jac:
+            for k in range(n1):
+                jac[n, k] = 0.0
+                jac[k, n] = 0.0
+
+
+@njit(inline="always")
+def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
+    """dy/dt [1/s] into ``f`` (and ∂f/∂y into ``jac`` if ``want_jac``); flows into ``ws.flows``.
+
+    Parameters
+    ----------
+    y : ndarray (N+1,)
+        Log-densities ln(ρ/ρ₀) [-].
+    theta : float
+        Shaft angle [rad].
+    gaps : ndarray (N,)
+        Tooth-tip gap heights at θ [m] (from :func:`gerotor_twin.model.contact.contact`).
+    km, op, ws : KernelModel, Operating, Workspace
+    """
+    n = km.pc.n
+    chamber_geometry(theta, km.tab, n, ws.geo)
+    volume_states(y, km, op, ws)
+    for i in range(ws.flows.shape[0]):
+        ws.flows[i] = 0.0
+    if want_jac:
+        for i in range(n + 1):
+            for k in range(n + 1):
+                jac[i, k] = 0.0
+    port_flows(km, op, ws, jac, want_jac)
+    tip_flows(gaps, km, op, ws, jac, want_jac)
+    line_flows(km, op, ws, jac, want_jac)
+    assemble(km, op, ws, f, jac, want_jac)

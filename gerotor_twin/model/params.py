@@ -1,0 +1,171 @@
+"""The pump as the compiled kernels see it: named structures built from the config.
+
+Three structures, each field named once with its unit, travel together as one
+:class:`KernelModel`:
+
+=====================  ==========================================================
+:class:`KernelTables`  geometry over the shaft angle (rows = angle samples)
+:class:`PumpConstants` clearances, conductances, orifice law, boundary, numerics
+``StateEquation``      the oil's ln ρ ⇄ p (:mod:`gerotor_twin.hydraulics.state_equation`)
+=====================  ==========================================================
+
+:class:`Operating` holds what is constant over one ``advance`` call (speed,
+port pressures and their log-densities) and :class:`Workspace` every scratch
+array of the hot loop, allocated once per model so a step allocates nothing.
+:func:`kernel_model` is the one place where config values become kernel values.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..config import PumpConfig
+from ..geometry.lateral import LateralGeometry
+from ..geometry.tables import GeometryTables
+from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
+from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation
+
+__all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
+           "operating", "workspace", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
+           "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE"]
+
+#: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
+#: delivered (net out of the delivery port, after the line leakages) [m³/s], in through the
+#: suction port [m³/s], suction–delivery leakage (sec. 3.3) [m³/s], drain (sec. 3.4) [m³/s],
+#: through the delivery restriction [m³/s], port mass flows / ρ₀ in and out [m³/s].
+(FL_DELIVERY, FL_SUCTION, FL_SUCTION_DELIVERY, FL_DRAIN, FL_RESTRICTION, FL_MASS_IN,
+ FL_MASS_OUT) = range(7)
+N_FLOWS = 7
+
+#: Error measures of the sub-step control: on ln(ρ/ρ₀) (absolute) or on the pressure,
+#: relative to the delivery–suction pressure difference.
+ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
+
+
+class KernelTables(NamedTuple):
+    """Geometry of chamber 0 / lobe 0 sampled over one chamber period (see geometry.tables)."""
+    rows: np.ndarray    #: (M, len(COLUMNS)): one row per angle sample, columns as ``COLUMNS`` [SI]
+    period: float       #: chamber period Θ = 2πN/(N−1) [rad]
+    shift: float        #: lead of chamber j+1 over chamber j, 2π/(N−1) [rad]
+    scale: float        #: M/Θ, samples per radian [1/rad]
+
+
+class PumpConstants(NamedTuple):
+    """Everything scalar the right-hand side and the stepper need (SI)."""
+    n: int                      #: number of chambers N [-]
+    width: float                #: gear width b = L [m]
+    tip_clearance: float        #: δ, nominal tooth-tip clearance [m]
+    tip_dh: float               #: dh of the equivalent gap length (sec. 3.1) [-]
+    cd_max: float               #: turbulent discharge coefficient [-]
+    lambda_crit: float          #: critical flow number of Cd(λ) [-]
+    density: float             #: ρ₀ [kg/m³]
+    viscosity: float            #: μ [Pa·s]
+    g_lateral: float            #: lateral conductance across one lobe land, both faces [m³/(s·Pa)]
+    g_suction_delivery: float   #: suction–delivery conductance (sec. 3.3) [m³/(s·Pa)]
+    g_drain: float              #: delivery–drain conductance (sec. 3.4) [m³/(s·Pa)]
+    housing_clearance: float    #: c, outer gear–housing radial clearance [m]
+    journal_radius: float       #: outer-gear radius = journal radius [m]
+    eps_max: float              #: largest eccentricity ratio before housing contact [-]
+    restriction: bool           #: delivery volume is a state behind a restriction (sec. 4)
+    line_volume: float          #: delivery line volume (restriction mode) [m³]
+    restriction_area: float     #: restriction orifice area [m²]
+    p_tank: float               #: pressure behind the restriction [Pa]
+    tolerance: float            #: sub-step error tolerance (measure: ``error_measure``) [-]
+    error_measure: int          #: ERROR_LOG_DENSITY or ERROR_PRESSURE
+    log_density_tolerance: float  #: cap of the ln ρ error where β is small (ERROR_PRESSURE) [-]
+
+
+class KernelModel(NamedTuple):
+    """The three structures the kernels take as one argument."""
+    tab: KernelTables
+    pc: PumpConstants
+    eos: StateEquation
+
+
+class Operating(NamedTuple):
+    """Inputs held over one ``advance`` call, with what the kernels derive from them."""
+    omega: float        #: shaft speed [rad/s]
+    p_s: float          #: suction pressure, absolute [Pa]
+    p_d: float          #: delivery pressure, absolute [Pa] (initial value in restriction mode)
+    rho_s: float        #: ρ(p_s)/ρ₀ [-]
+    s_d: float          #: ln(ρ(p_d)/ρ₀) [-]
+    dp_ref: float       #: pressure scale of the error measure, max(p_d − p_s, 1 bar) [Pa]
+
+
+class Workspace(NamedTuple):
+    """Scratch arrays of the hot loop (one per model; not shared between threads)."""
+    p: np.ndarray           #: (N+1,) pressures of the current RHS [Pa]
+    beta: np.ndarray        #: (N+1,) bulk moduli [Pa]
+    rho: np.ndarray         #: (N+1,) ρ/ρ₀ [-]
+    acc: np.ndarray         #: (N+1,) Σ (ρ_up/ρ) Q into each volume [m³/s]
+    geo: np.ndarray         #: (N, 6) V, dV/dθ, A_s, A_d, κ_rel, v_r/ω of each chamber
+    f0: np.ndarray          #: (N+1,) RHS at the start of a sub-step [1/s]
+    f1: np.ndarray          #: (N+1,) RHS at the second stage [1/s]
+    k1: np.ndarray
+    k2: np.ndarray
+    y1: np.ndarray
+    ynew: np.ndarray
+    err: np.ndarray
+    wt: np.ndarray          #: (N+1,) error weights [1/-]
+    jac: np.ndarray         #: (N+1, N+1) ∂f/∂y [1/s]
+    lu: np.ndarray          #: (N+1, N+1) LU of I − γ h J
+    piv: np.ndarray         #: (N+1,) pivots
+    gaps0: np.ndarray       #: (N,) tooth-tip gaps at the sub-step start [m]
+    gaps1: np.ndarray       #: (N,) ... at its end [m]
+    gaps_start: np.ndarray  #: (N,) gaps at the start of the output step [m]
+    gaps_end: np.ndarray    #: (N,) ... at its end, gear displacement frozen [m]
+    cmat: np.ndarray        #: (N, 9) gap expansion coefficients per lobe
+    pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
+    flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
+    flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
+    ctrl: np.ndarray        #: (2,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ)
+
+
+def _conductances(config: PumpConfig, lat: LateralGeometry) -> tuple[float, float, float]:
+    """Lateral, suction–delivery and drain conductances [m³/(s·Pa)]: flows at Δp = 1 Pa, both faces."""
+    mu, h, faces = config.fluid.viscosity_pa_s, config.clearances.lateral_m, 2.0
+    g_lat = faces * sector_circumferential_flow(1.0, h, lat.chi_lobe, lat.lobe_r_in, lat.lobe_r_out, mu)[0]
+    g_sd = faces * (sector_circumferential_flow(1.0, h, lat.chi1, lat.ring_r_in, lat.ring_r_out, mu)[0]
+                    + sector_circumferential_flow(1.0, h, lat.chi2, lat.ring_r_in, lat.ring_r_out, mu)[0])
+    g_dr = faces * sector_radial_flow(1.0, h, lat.chi3, lat.drain_r_in, lat.drain_r_out, mu)[0]
+    return g_lat, g_sd, g_dr
+
+
+def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeometry,
+                 eps_max: float = 0.95) -> KernelModel:
+    """Kernel view of a validated config (conductances of sec. 3.2–3.4 evaluated once)."""
+    g, f, n = config.gears, config.fluid, config.numerics
+    g_lat, g_sd, g_dr = _conductances(config, lateral)
+    tab = KernelTables(rows=np.ascontiguousarray(tables.data.T), period=tables.period, shift=tables.shift,
+                       scale=tables.size / tables.period)
+    measure = ERROR_PRESSURE if n.error_measure == "pressure" else ERROR_LOG_DENSITY
+    pc = PumpConstants(
+        n=g.chambers, width=g.width, tip_clearance=g.tip_clearance, tip_dh=config.tip_dh,
+        cd_max=config.orifice.cd_max, lambda_crit=config.orifice.lambda_crit, density=f.density_kg_m3,
+        viscosity=f.viscosity_pa_s, g_lateral=g_lat, g_suction_delivery=g_sd, g_drain=g_dr,
+        housing_clearance=config.clearances.housing_radial_m, journal_radius=g.outer_radius, eps_max=eps_max,
+        restriction=config.boundary.mode == "restriction", line_volume=config.boundary.delivery_volume_m3,
+        restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
+        tolerance=n.tolerance, error_measure=measure,
+        log_density_tolerance=n.log_density_tolerance)
+    return KernelModel(tab=tab, pc=pc, eos=state_equation(f))
+
+
+def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:
+    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa]."""
+    return Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
+                     s_d=log_density_of(p_d, km.eos), dp_ref=max(p_d - p_s, 1e5))
+
+
+def workspace(n: int) -> Workspace:
+    """Scratch arrays for a pump of ``n`` chambers."""
+    n1 = n + 1
+
+    def v(k=n1):
+        return np.zeros(k)
+
+    return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 6)), f0=v(), f1=v(), k1=v(), k2=v(),
+                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1)), lu=np.zeros((n1, n1)),
+                     piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(2))
