@@ -111,7 +111,7 @@ class Numerics:
     table_points: int = 2048
     max_step_deg: float = 2.0
     max_step_s: float = 2e-4
-    tolerance: float = 0.1
+    tolerance: float = 0.05
     error_measure: str = "pressure"
     log_density_tolerance: float = 2e-4
 

@@ -20,14 +20,17 @@ shaft angle).  Figures, all fractions (not percent):
 """
 from __future__ import annotations
 
+import json
 import math
 import time
+from dataclasses import dataclass
 import numpy as np
 
 from .pump import PumpModel
 from .steady import reference_config, run_steady
 
-__all__ = ["accuracy", "print_accuracy", "within_budget", "reference_numerics", "BUDGET"]
+__all__ = ["accuracy", "compare", "Revolution", "reference_revolution", "print_accuracy", "within_budget",
+           "reference_numerics", "BUDGET"]
 
 #: The budget of the default numerics (issue 10): RMS ≤ 1 %, |η error| ≤ 0.3 % relative, peak ≤ 2 %.
 BUDGET = {"rms_pressure_error": 0.01, "efficiency_error": 0.003, "peak_pressure_error": 0.02}
@@ -59,9 +62,88 @@ def _rtf(model: PumpModel, state, rpm: float, bar: float, revolutions: int) -> t
     return span / wall, (new.counts["substeps"] - state.counts["substeps"]) / revolutions
 
 
-def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility", reference=None,
-             rtf_revolutions: int = 20) -> dict:
-    """Compare the default numerics of ``cfg`` with :func:`reference_numerics` at one operating point.
+@dataclass(frozen=True)
+class Revolution:
+    """One revolution at periodic steady state, as compared here (SI; angles unwrapped [rad])."""
+    theta: np.ndarray               #: (n,) shaft angle of each sample [rad]
+    chamber_pressures: np.ndarray   #: (n, N) [Pa]
+    delivery_flow: np.ndarray       #: (n,) [m³/s]
+    volumetric_efficiency: float    #: [-]
+    mean_delivery_flow: float       #: [m³/s]
+
+    @classmethod
+    def of(cls, res) -> "Revolution":
+        """From a :class:`~gerotor_twin.model.steady.SteadyResult`."""
+        o = res.outputs
+        return cls(o.theta.copy(), o.chamber_pressures.copy(), o.delivery_flow.copy(), res.volumetric_efficiency,
+                   res.mean_delivery_flow_m3s)
+
+    def at(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Chamber pressures and delivery flow at shaft angles θ (another run's samples).
+
+        Chambers turn with the outer gear (period 2πN/(N−1)): k shaft revolutions later
+        chamber j sits where chamber j − k was, so the columns are relabelled; between
+        samples the reference is interpolated linearly in angle (exact where samples coincide).
+        """
+        two_pi = 2 * math.pi
+        n = self.chamber_pressures.shape[1]
+        rev0 = math.floor((self.theta[0] - 1e-9) / two_pi)
+        phi_ref = self.theta - two_pi * rev0                       # (0, 2π]
+        p = np.empty((theta.size, n))
+        q = np.empty(theta.size)
+        for i, th in enumerate(theta):
+            rev = math.floor((th - 1e-9) / two_pi)
+            phi = th - two_pi * rev
+            cols = [(j - (rev - rev0)) % n for j in range(n)]
+            if phi > phi_ref[-1] + 1e-9:                            # wrap: below the first sample
+                phi -= two_pi
+            p[i] = [np.interp(phi, phi_ref, self.chamber_pressures[:, c], period=two_pi) for c in cols]
+            q[i] = np.interp(phi, phi_ref, self.delivery_flow, period=two_pi)
+        return p, q
+
+    def save(self, path, **meta) -> None:
+        """Compressed .npz with ``meta`` (numbers/strings) alongside."""
+        np.savez_compressed(path, theta=self.theta, chamber_pressures=self.chamber_pressures,
+                            delivery_flow=self.delivery_flow,
+                            scalars=np.array([self.volumetric_efficiency, self.mean_delivery_flow]),
+                            meta=np.array(json.dumps(meta)))
+
+    @classmethod
+    def load(cls, path) -> tuple["Revolution", dict]:
+        z = np.load(path)
+        eta, q = z["scalars"]
+        return (cls(z["theta"], z["chamber_pressures"], z["delivery_flow"], float(eta), float(q)),
+                json.loads(str(z["meta"])))
+
+
+def compare(test: Revolution, ref: Revolution, p_suction: float, p_delivery: float) -> dict:
+    """Error figures of ``test`` against ``ref`` (see the module docstring), fractions [-]."""
+    p_ref, q_ref = ref.at(test.theta)
+    dp = p_delivery - p_suction
+    err = (test.chamber_pressures - p_ref) / dp
+    peak_ref = ref.chamber_pressures.max()
+    return {
+        "rms_pressure_error": float(np.sqrt(np.mean(err ** 2))),
+        "max_pressure_error": float(np.abs(err).max()),
+        "peak_pressure_error": float((test.chamber_pressures.max() - peak_ref) / (peak_ref - p_suction)),
+        "efficiency_error": float((test.volumetric_efficiency - ref.volumetric_efficiency)
+                                  / ref.volumetric_efficiency),
+        "flow_rms_error": float(np.sqrt(np.mean((test.delivery_flow - q_ref) ** 2)) / abs(q_ref.mean())),
+        "mean_flow_error": float((test.mean_delivery_flow - ref.mean_delivery_flow) / ref.mean_delivery_flow),
+        "volumetric_efficiency": test.volumetric_efficiency,
+        "reference_volumetric_efficiency": ref.volumetric_efficiency,
+    }
+
+
+def reference_revolution(cfg, rpm: float, bar: float, model: str = "mobility") -> Revolution:
+    """The tight reference at one operating point (:func:`reference_numerics`)."""
+    return Revolution.of(run_steady(PumpModel(reference_numerics(cfg, rpm), model), rpm, bar,
+                                    max_revolutions=40, rtol=1e-6))
+
+
+def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility",
+             reference: Revolution | None = None, rtf_revolutions: int = 20) -> dict:
+    """Compare the numerics of ``cfg`` with :func:`reference_numerics` at one operating point.
 
     Parameters
     ----------
@@ -71,47 +153,19 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
         Operating point [rpm, bar gauge].
     model : str
         Outer-gear model.
-    reference : SteadyResult, optional
+    reference : Revolution, optional
         A precomputed reference revolution (same point), to compare several numerics cheaply.
     """
-    ref = reference if reference is not None else run_steady(PumpModel(reference_numerics(cfg, rpm), model), rpm,
-                                                             bar, max_revolutions=40, rtol=1e-6)
+    ref = reference if reference is not None else reference_revolution(cfg, rpm, bar, model)
     test_model = PumpModel(cfg, model)
     res = run_steady(test_model, rpm, bar, max_revolutions=40, rtol=1e-6)
-    a, b = res.outputs, ref.outputs
-    step = round(len(b) / len(a))
-    ia = np.arange(len(a))
-    ib = (ia + 1) * step - 1                    # reference row at the same shaft angle
-    if ib[-1] >= len(b) or not np.allclose(np.mod(a.theta - b.theta[ib] + math.pi, 2 * math.pi) - math.pi, 0,
-                                           atol=1e-9):
-        raise ValueError("the reference samples do not coincide with the default ones")
     ps = cfg.boundary.suction_pressure_pa
-    dp = cfg.fluid.atmospheric_pa + bar * 1e5 - ps
-    # chambers turn with the outer gear (period 2πN/(N−1)): after k more shaft revolutions
-    # chamber j sits where chamber j − k was
-    k = round((a.theta[0] - b.theta[ib[0]]) / (2 * math.pi))
-    n = test_model.N
-    p_ref = b.chamber_pressures[ib][:, [(j - k) % n for j in range(n)]]
-    err = (a.chamber_pressures - p_ref) / dp
-    q_ref = b.delivery_flow[ib]
-    peak_ref = b.chamber_pressures.max()
-    rtf, substeps = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)
-    return {
-        "rpm": rpm, "bar": bar, "model": model,
-        "numerics": {k: getattr(cfg.numerics, k) for k in ("max_step_deg", "tolerance", "error_measure")},
-        "rms_pressure_error": float(np.sqrt(np.mean(err ** 2))),
-        "max_pressure_error": float(np.abs(err).max()),
-        "peak_pressure_error": float((a.chamber_pressures.max() - peak_ref) / (peak_ref - ps)),
-        "efficiency_error": float((res.volumetric_efficiency - ref.volumetric_efficiency)
-                                  / ref.volumetric_efficiency),
-        "flow_rms_error": float(np.sqrt(np.mean((a.delivery_flow - q_ref) ** 2)) / abs(q_ref.mean())),
-        "mean_flow_error": float((res.mean_delivery_flow_m3s - ref.mean_delivery_flow_m3s)
-                                 / ref.mean_delivery_flow_m3s),
-        "volumetric_efficiency": res.volumetric_efficiency,
-        "reference_volumetric_efficiency": ref.volumetric_efficiency,
-        "substeps_per_revolution": substeps,
-        "rtf": rtf,
-    }
+    row = {"rpm": rpm, "bar": bar, "model": model,
+           "numerics": {k: getattr(cfg.numerics, k) for k in ("max_step_deg", "tolerance", "error_measure",
+                                                               "log_density_tolerance")}}
+    row.update(compare(Revolution.of(res), ref, ps, cfg.fluid.atmospheric_pa + bar * 1e5))
+    row["rtf"], row["substeps_per_revolution"] = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)
+    return row
 
 
 def within_budget(row: dict) -> bool:

@@ -11,11 +11,12 @@ which is Eq. (20) of [1] (corrected: dp/dθ = β/(Vω)(ΣQ − ω dV/dθ); the
 printed 1/ω_int is not dimensionally right) multiplied through by 1/β, since
 dp = β dy.  Q_i are volume flows at upstream conditions; the density ratios
 (at most 0.2 % here) make the mass balance close exactly.  ∂f/∂y is assembled
-alongside: ∂Q/∂p · β(p) / V, without the derivatives of the density ratios
-(ROS2 is second order for any approximation of the Jacobian).
+alongside, exactly: ∂Q/∂p · β(p) / V and the derivatives of the density
+ratios (:func:`transfer`).
 
 The parts, each a function of its own: :func:`chamber_geometry` (table rows of
 every chamber), :func:`volume_states` (p, β, ρ of every volume),
+:func:`transfer` (one flow between two volumes),
 :func:`port_flows` (Eq. (21)), :func:`tip_flows` (Eq. (22) and sec. 3.2),
 :func:`line_flows` (sec. 3.3, 3.4 and the delivery restriction of sec. 4),
 :func:`assemble` and :func:`rhs`.
@@ -37,7 +38,7 @@ from .contact import column, locate
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY)
 
-__all__ = ["rhs", "chamber_geometry", "volume_states", "port_flows", "tip_flows", "line_flows", "assemble",
+__all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
            "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR"]
 
 G_V, G_DV, G_AS, G_AD, G_KREL, G_VR = range(6)     # columns of Workspace.geo
@@ -73,35 +74,44 @@ def volume_states(y, km, op, ws):
 
 
 @njit(inline="always")
+def transfer(a, b, q, dq, ws, jac, want_jac):
+    """Book a volume flow q from volume a to volume b [m³/s] (dq = ∂q/∂(p_a − p_b)) into acc and ∂f/∂y.
+
+    q is measured at upstream conditions: the downstream volume receives (ρ_up/ρ_down)·q.
+    Exact derivatives with y = ln(ρ/ρ₀) (∂p/∂y = β, ∂ρ/∂y = ρ):
+    ∂acc_d/∂y_u = r(q + q'β_u), ∂acc_d/∂y_d = −r(q + q'β_d), ∂acc_u/∂y_u = −q'β_u,
+    ∂acc_u/∂y_d = q'β_d, with r = ρ_u/ρ_d and q ≥ 0 from u to d.
+    """
+    u, d = (a, b) if q >= 0.0 else (b, a)
+    qa = abs(q)
+    r = ws.rho[u] / ws.rho[d]
+    ws.acc[d] += r * qa
+    ws.acc[u] -= qa
+    if want_jac:
+        jac[d, u] += r * (qa + dq * ws.beta[u])
+        jac[d, d] -= r * (qa + dq * ws.beta[d])
+        jac[u, u] -= dq * ws.beta[u]
+        jac[u, d] += dq * ws.beta[d]
+
+
+@njit(inline="always")
 def port_flows(km, op, ws, jac, want_jac):
     """Suction and delivery port → chamber flows, Eq. (21) of [1] with Cd(λ)."""
     pc = km.pc
     n = pc.n
     p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
-    pd, rd = p[n], rho[n]
     for j in range(n):
-        pj, rj = p[j], rho[j]
-        q, dq = orifice_flow(op.p_s - pj, geo[j, G_AS], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
-        acc[j] += (op.rho_s / rj if q > 0.0 else 1.0) * q
+        q, dq = orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        r = op.rho_s / rho[j] if q > 0.0 else 1.0       # the suction port is a source at p_s, not a state
+        acc[j] += r * q
         fl[FL_SUCTION] += q
-        fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rj) * q
+        fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
         if want_jac:
-            jac[j, j] -= (op.rho_s / rj if q > 0.0 else 1.0) * dq * beta[j]
-        q, dq = orifice_flow(pd - pj, geo[j, G_AD], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)    # Eq. (21)
-        fl[FL_MASS_OUT] -= (rd if q > 0.0 else rj) * q
-        if q > 0.0:
-            acc[j] += rd / rj * q
-            acc[n] -= q
-            fl[FL_DELIVERY] -= q
-        else:
-            acc[j] += q
-            acc[n] -= rj / rd * q
-            fl[FL_DELIVERY] -= rj / rd * q
-        if want_jac:
-            jac[j, j] -= dq * beta[j]
-            jac[n, j] += dq * beta[j]
-            jac[j, n] += dq * beta[n]
-            jac[n, n] -= dq * beta[n]
+            jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
+        q, dq = orifice_flow(p[n] - p[j], geo[j, G_AD], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
+        fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
+        transfer(n, j, q, dq, ws, jac, want_jac)
 
 
 @njit(inline="always")
@@ -112,7 +122,7 @@ def tip_flows(gaps, km, op, ws, jac, want_jac):
     """
     pc = km.pc
     n = pc.n
-    p, beta, rho, acc, geo = ws.p, ws.beta, ws.rho, ws.acc, ws.geo
+    p, geo = ws.p, ws.geo
     for j in range(n):
         jm = (j - 1) % n
         q = 0.0
@@ -123,17 +133,7 @@ def tip_flows(gaps, km, op, ws, jac, want_jac):
             q, dq = tooth_tip_flow(p[jm] - p[j], hk, le, op.omega * geo[j, G_VR], pc.width, pc.viscosity)  # Eq. (22)
         q += pc.g_lateral * (p[jm] - p[j])                                   # sec. 3.2
         dq += pc.g_lateral
-        if q > 0.0:
-            acc[j] += rho[jm] / rho[j] * q
-            acc[jm] -= q
-        else:
-            acc[j] += q
-            acc[jm] -= rho[j] / rho[jm] * q
-        if want_jac:
-            jac[j, jm] += dq * beta[jm]
-            jac[j, j] -= dq * beta[j]
-            jac[jm, jm] -= dq * beta[jm]
-            jac[jm, j] += dq * beta[j]
+        transfer(jm, j, q, dq, ws, jac, want_jac)
 
 
 @njit(inline="always")
@@ -174,10 +174,11 @@ def assemble(km, op, ws, f, jac, want_jac):
             for k in range(n1):
                 jac[n, k] /= km.pc.line_volume
     else:
-        f[n] = 0.0                                   # imposed delivery pressure: not a state
+        # imposed delivery pressure: y_N is not a state but the quadrature ∫ Q_delivered dt [m³],
+        # integrated by the same Rosenbrock stages as the chambers (nothing depends on it)
+        f[n] = ws.acc[n]
         if want_jac:
             for k in range(n1):
-                jac[n, k] = 0.0
                 jac[k, n] = 0.0
 
 

@@ -37,7 +37,7 @@ from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import rhs
 from .loads import outer_gear_load
-from .params import ERROR_PRESSURE
+from .params import ERROR_PRESSURE, FL_DELIVERY
 
 # ------------------------------------------------------------------ outputs
 # per-step record columns besides the chamber pressures and gaps
@@ -54,7 +54,7 @@ N_COUNTERS = 8
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH = range(2)
+CT_SUBSTEP, CT_FRESH, CT_PENDING = range(3)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 
@@ -110,24 +110,35 @@ def _error_weights(km, op, ws):
     """Per-volume weights w with ‖err‖ = max |err_i| w_i ≤ 1 accepted."""
     pc = km.pc
     for i in range(pc.n + 1):
-        if pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
+        if i == pc.n and not pc.restriction:
+            ws.wt[i] = 0.0                                          # the delivered-volume quadrature
+        elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
             ws.wt[i] = max(ws.beta[i] / (pc.tolerance * op.dp_ref), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
 
 
 @njit(inline="always")
-def _first_stage(y, th, km, op, ws):
-    """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``, its flows into ``ws.flows_prev``."""
+def _first_stage(y, th, km, op, ws, integrals):
+    """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
+
+    The flows here are those at the end of the last accepted sub-step: its trapezoid
+    (``ws.flows_prev`` at its start, these at its end) is added to ``integrals`` now,
+    so ∫ flow dt uses the flows of the accepted states, at no extra RHS.
+    """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
     _error_weights(km, op, ws)
+    h = ws.ctrl[CT_PENDING]
     for i in range(ws.flows.shape[0]):
+        if h > 0.0 and not (i == FL_DELIVERY and not km.pc.restriction):
+            integrals[i] += 0.5 * h * (ws.flows_prev[i] + ws.flows[i])
         ws.flows_prev[i] = ws.flows[i]
+    ws.ctrl[CT_PENDING] = 0.0
     ws.ctrl[CT_FRESH] = 1.0
 
 
 @njit(inline="always")
-def ros2_step(y, th, h, km, op, ws):
+def ros2_step(y, th, h, km, op, ws, integrals):
     """One ROS2 sub-step of size h [s] from (y, θ): ``ws.ynew`` and the embedded error ``ws.err``.
 
     Uses ``ws.f0``/``ws.jac`` when ``ws.ctrl[CT_FRESH]`` says they hold the RHS at
@@ -135,7 +146,7 @@ def ros2_step(y, th, h, km, op, ws):
     """
     n1 = y.shape[0]
     if ws.ctrl[CT_FRESH] == 0.0:
-        _first_stage(y, th, km, op, ws)
+        _first_stage(y, th, km, op, ws, integrals)
     for i in range(n1):
         for k in range(n1):
             ws.lu[i, k] = -GAMMA * h * ws.jac[i, k]
@@ -182,7 +193,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
-        en = ros2_step(y, th, h, km, op, ws)
+        en = ros2_step(y, th, h, km, op, ws, integrals)
         if en <= 1.0 or h <= h_min:
             finite = True
             for i in range(n1):
@@ -194,8 +205,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
                     return
             for i in range(n1):
                 y[i] = ws.ynew[i]
-            for i in range(ws.flows.shape[0]):    # ∫ flow dt: trapezoid over the sub-step (second stage ≈ end)
-                integrals[i] += 0.5 * h * (ws.flows_prev[i] + ws.flows[i])
+            ws.ctrl[CT_PENDING] = h               # its ∫ flow dt is closed by the next first stage
             for k in range(pc.n):
                 ws.gaps0[k] = ws.gaps1[k]
             ws.ctrl[CT_FRESH] = 0.0
@@ -274,17 +284,23 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
 
     Writes one record per step into ``rec`` (N_REC columns), ``rec_p`` (chamber
     pressures) and ``rec_gap`` (gap heights); ``integrals`` accumulates
-    ∫ flow dt [m³] per ``FL_*`` index (trapezoid over every ROS2 sub-step).  ``moving``: the outer
+    ∫ flow dt [m³] per ``FL_*`` index: the delivered volume (imposed delivery pressure)
+    with the Rosenbrock stages themselves, consistent with the chambers' mass balance;
+    the others by the trapezoid over every accepted ROS2 sub-step.  ``moving``: the outer
     ``move``: MOVE_FIXED (the centre stays where it is), MOVE_MOBILITY (Heun
     steps of the mobility method, sec. 2.2 of [1]) or MOVE_EXTERNAL (held here,
     moved by the caller: :func:`integrate_external`).
     """
     pc = km.pc
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
-    _first_stage(y, theta, km, op, ws)
+    ws.ctrl[CT_PENDING] = 0.0
+    _first_stage(y, theta, km, op, ws, integrals)
     for n in range(n_steps):
+        if not pc.restriction:
+            y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
         pressure_step(y, theta, h, ex, ey, km, op, ws, counters, integrals)
         if not pc.restriction:
+            integrals[FL_DELIVERY] += y[pc.n]
             y[pc.n] = op.s_d
         counters[C_CAVITATION] += to_pressures(y, km, ws.pres)
         theta += op.omega * h
@@ -300,7 +316,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
         ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
-        _first_stage(y, theta, km, op, ws)        # end-of-step flows (recorded) = next first stage
+        _first_stage(y, theta, km, op, ws, integrals)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
     e[0] = ex

@@ -1,0 +1,159 @@
+"""The compiled kernel: Jacobian, state equation, pure-Python path (closed form / behaviour tiers)."""
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gerotor_twin.hydraulics.fluid import log_density
+from gerotor_twin.hydraulics.state_equation import log_density_of, pressure_of
+from gerotor_twin.model import flows as F
+from gerotor_twin.model.params import operating
+from gerotor_twin.model.pump import Inputs, PumpModel
+
+ROOT = Path(__file__).resolve().parent.parent
+P_ATM = 101325.0
+
+
+@pytest.fixture(scope="module")
+def warm(cfg):
+    """Mobility model at its periodic state, 3000 rpm / 27.5 bar."""
+    m = PumpModel(cfg, "mobility")
+    inp = Inputs(3000 * math.pi / 30, P_ATM, P_ATM + 27.5e5)
+    s, _ = m.advance(m.initial_state(inp), 0.1, inp)
+    return m, inp, s
+
+
+def _rhs(m, op, y, theta, gaps):
+    ws = m._ws
+    f = np.empty(m.N + 1)
+    jac = np.empty((m.N + 1, m.N + 1))
+    F.rhs(y, theta, gaps, m.kernel, op, ws, f, jac, True)
+    return f, jac.copy()
+
+
+def _fd_jacobian(m, op, y, theta, gaps):
+    n1 = m.N + 1
+    fd = np.empty((n1, n1))
+    for k in range(n1):
+        d = 1e-9                  # ≈ 1.5 Pa in the liquid, 1.5 mPa where β is small
+        yp, ym = y.copy(), y.copy()
+        yp[k] += d
+        ym[k] -= d
+        fd[:, k] = (_rhs(m, op, yp, theta, gaps)[0] - _rhs(m, op, ym, theta, gaps)[0]) / (2 * d)
+    return fd
+
+
+def _check_jacobian(m, op, y, theta, gaps):
+    """Analytic ∂f/∂y vs central differences, entry by entry relative to the row's largest entry.
+
+    The analytic Jacobian is exact (flows and density ratios, flows.transfer); what is left is
+    the difference quotient's own error, far below the bound 1e-4 of the row scale.
+    """
+    _, jac = _rhs(m, op, y, theta, gaps)
+    fd = _fd_jacobian(m, op, y, theta, gaps)
+    rows = range(m.N + 1) if m.restriction_mode else range(m.N)
+    for j in rows:
+        scale = np.abs(fd[j]).max()
+        assert scale > 0
+        assert np.abs(jac[j] - fd[j]).max() <= 1e-4 * scale, (j, jac[j], fd[j])
+    return jac, fd
+
+
+def test_jacobian_matches_finite_differences_in_the_liquid_and_at_port_edges(warm):
+    """Behaviour: the Jacobian of the running pump at several angles, among them port edges."""
+    m, inp, s = warm
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    gaps, _, _ = m.gaps(s.theta, s.eccentricity)
+    tab = m.tables
+    edge_seen = False
+    for theta in np.linspace(s.theta, s.theta + tab.shift, 9):
+        areas = [(tab.column("AS", theta, j), tab.column("AD", theta, j)) for j in range(m.N)]
+        amax = tab.data[2].max()
+        edge_seen |= any(0 < a < 0.05 * amax for pair in areas for a in pair)
+        _check_jacobian(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])
+    assert edge_seen, "no angle with a port edge (open area < 5 % of its maximum) was checked"
+
+
+def test_jacobian_matches_finite_differences_inside_the_switch_band(warm):
+    """Behaviour: suction chambers placed inside the β switch band (p_atm ± band/2) and on the floor."""
+    m, inp, s = warm
+    eos = m.kernel.eos
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    y = s.log_density.copy()
+    theta = s.theta
+    suction = [j for j in range(m.N) if m.tables.column("AS", theta, j) > 0]
+    assert suction
+    for target in (eos.p_atm - 0.3 * eos.band, eos.p_atm + 0.2 * eos.band, eos.p_lo - 20e3):
+        for j in suction:
+            y[j] = log_density_of(target, eos)
+        _check_jacobian(m, op, y, theta, m.gaps(theta, s.eccentricity)[0])
+
+
+def test_jacobian_in_restriction_mode(cfg):
+    """Behaviour: the delivery volume is a state behind the restriction (sec. 4): its row too."""
+    from dataclasses import replace
+    c = replace(cfg, boundary=replace(cfg.boundary, mode="restriction"))
+    m = PumpModel(c, "fixed")
+    inp = Inputs(1000 * math.pi / 30, P_ATM, P_ATM)
+    s, _ = m.advance(m.initial_state(inp), 0.05, inp)
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    _check_jacobian(m, op, s.log_density, s.theta, m.gaps(s.theta, s.eccentricity)[0])
+
+
+def test_pressure_of_inverts_the_exact_state_equation(cfg):
+    """Closed form: p(s) of the kernel against bisection on the exact s(p) (quadrature), all regions."""
+    from gerotor_twin.model.params import kernel_model
+    m = PumpModel(cfg, "fixed")
+    eos = m.kernel.eos
+    f = cfg.fluid
+    args = (f.bulk_modulus_pa, f.cavitation_ratio, f.atmospheric_pa, f.switch_band_pa, f.vapour_pressure_pa)
+    rng = np.random.default_rng(7)
+    pressures = np.concatenate([rng.uniform(eos.p_lo, eos.p_hi, 300),          # switch band
+                                rng.uniform(f.vapour_pressure_pa + 10, eos.p_lo, 100),   # vapour floor
+                                rng.uniform(eos.p_hi, 40e5, 100)])            # liquid
+    for p in pressures:
+        s = log_density(p, *args)
+        assert abs(pressure_of(s, eos) - p) <= 2e-4 + 1e-12 * p, p   # stated: Hermite table error ≤ 2e-4 Pa
+        assert log_density_of(p, eos) == pytest.approx(s, abs=1e-15)
+    assert kernel_model  # the structure builder is importable on its own
+
+
+_NOJIT = r"""
+import json, math, sys
+from gerotor_twin.config import load_config
+from gerotor_twin.model.pump import Inputs, PumpModel
+out = {}
+for name in ("fixed", "mobility"):
+    m = PumpModel(load_config(), name)
+    inp = Inputs(3000 * math.pi / 30, 101325.0, 101325.0 + 27.5e5)
+    s, o = m.advance(m.initial_state(inp), 12 * m.step_size(inp.omega), inp)
+    out[name] = {"p": o.chamber_pressures.tolist(), "e": o.eccentricity.tolist(), "q": o.delivery_flow.tolist(),
+                 "y": s.log_density.tolist(), "eta": o.volumetric_efficiency}
+json.dump(out, sys.stdout)
+"""
+
+
+@pytest.mark.slow
+def test_pure_python_path_equals_the_compiled_one():
+    """Behaviour: ``advance`` with NUMBA_DISABLE_JIT=1 (plain Python/NumPy) gives the compiled results.
+
+    Same operations in the same order; only libm vs LLVM intrinsics differ: 1e-9 relative.
+    """
+    runs = {}
+    for flag in ("0", "1"):
+        env = dict(os.environ, NUMBA_DISABLE_JIT=flag, PYTHONPATH=str(ROOT))
+        r = subprocess.run([sys.executable, "-c", _NOJIT], env=env, cwd=ROOT, capture_output=True, text=True,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+        runs[flag] = json.loads(r.stdout)
+    for name in ("fixed", "mobility"):
+        a, b = runs["0"][name], runs["1"][name]
+        for key in ("p", "q", "y", "e"):
+            x, y = np.asarray(a[key]), np.asarray(b[key])
+            assert np.allclose(x, y, rtol=1e-9, atol=1e-9 * np.abs(x).max() + 1e-300), (name, key)
+        assert a["eta"] == pytest.approx(b["eta"], rel=1e-9)
