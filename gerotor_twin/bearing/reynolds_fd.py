@@ -35,7 +35,7 @@ only excites odd modes.  Reynolds is linear in ``dh/dt``, hence in
     p = p_wedge + e_dot_x p_x + e_dot_y p_y        (three right-hand sides)
 
 Force, Eqs. (17)-(18): ``F = -sum max(p, 0) dx dy (cos, sin)(x_i/R)``
-(negative pressures clipped: cavitation).  Motion equation (19),
+(negative pressures clipped: cavitation).  Motion equation, Eq. (19) of [1],
 ``F(e_dot) + F_est = 0``, is piecewise linear in ``e_dot`` and is solved by
 (semismooth) Newton, started from the mobility-method velocity.
 

@@ -19,7 +19,7 @@ numerically over that half circle only:
   clusters the nodes at the pressure peak and stays accurate up to
   ``eps -> 1`` (24 nodes give round-off accuracy).
 
-The motion equation (6), ``F_film(e, e_dot) + F_est = 0``, is solved for
+The motion equation, Eq. (6) of [1], ``F_film(e, e_dot) + F_est = 0``, is solved for
 ``e_dot`` by Newton's method.  Inside the positive region the force is linear
 in ``v``, ``F = -A(v_dir) v``, and the derivative of the region boundary adds
 nothing (the pressure is zero there), so the exact Jacobian is ``-A``; the

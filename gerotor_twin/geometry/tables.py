@@ -175,10 +175,10 @@ def build_tables(g: GerotorGeometry, suction: Port, delivery: Port, size: int = 
         data[AD, i] = open_area(gi, t, delivery, poly=poly)
         X, _ = contact_points(gi, t)
         a, c = X[0], X[1]
-        lx, ly = a[0] - c[0], c[1] - a[1]                 # eq. (24) projections
+        lx, ly = a[0] - c[0], c[1] - a[1]                 # Eq. (24) projections
         m = 0.5 * (a + c) - gi.outer_centre               # chord midpoint -> arms
         data[FX, i], data[FY, i] = b * ly, b * lx
-        data[TQ, i] = b * (ly * (-m[1]) + lx * m[0])      # eq. (25)
+        data[TQ, i] = b * (ly * (-m[1]) + lx * m[0])      # Eq. (25)
         if progress is not None and i % 256 == 0:
             progress(i, size)
     h0, grad, hess, krel, vr, arm, Px, Py = _gap_columns(g, th)

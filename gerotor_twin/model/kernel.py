@@ -286,7 +286,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
     pressures) and ``rec_gap`` (gap heights); ``integrals`` accumulates
     ∫ flow dt [m³] per ``FL_*`` index: the delivered volume (imposed delivery pressure)
     with the Rosenbrock stages themselves, consistent with the chambers' mass balance;
-    the others by the trapezoid over every accepted ROS2 sub-step.  ``moving``: the outer
+    the others by the trapezoid over every accepted ROS2 sub-step.
     ``move``: MOVE_FIXED (the centre stays where it is), MOVE_MOBILITY (Heun
     steps of the mobility method, sec. 2.2 of [1]) or MOVE_EXTERNAL (held here,
     moved by the caller: :func:`integrate_external`).
@@ -324,14 +324,13 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
     return theta, t
 
 
-def integrate_external(model, y, e, theta, t, n_steps, h, op, rec, rec_p, rec_gap, counters, integrals):
-    """Output steps with a bearing kernel other than the mobility method (Method 1, FDM): a Python loop.
+def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, counters, integrals):
+    """Output steps with a bearing model other than the mobility method (Method 1, FDM): a Python loop.
 
     Each output step is one compiled :func:`integrate` step with the gear held,
-    then the same :func:`heun_step` with ``model.bearing.kernel`` (compiled for
-    it in each process: numba caches no function that takes a function).
+    then the same :func:`heun_step` with ``bearing.kernel`` and ``bearing.params``
+    (compiled for it in each process: numba caches no function that takes a function).
     """
-    km, ws, bearing = model.kernel, model._ws, model.bearing
     for i in range(n_steps):
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_gap[i:i + 1],
                              counters, integrals, MOVE_EXTERNAL)

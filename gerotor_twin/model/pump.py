@@ -238,7 +238,8 @@ class PumpModel:
         ws.ctrl[K.CT_SUBSTEP] = state.substep
         if n:
             if self._move == K.MOVE_EXTERNAL:
-                theta, t = K.integrate_external(self, y, e, theta, t, n, h, op, rec, rec_p, rec_g, counters, vols)
+                theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p,
+                                                rec_g, counters, vols)
             else:
                 theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_g, counters, vols,
                                        self._move)

@@ -2,7 +2,7 @@
 
 Sec. 4 of [1]: low speed, high discharge pressure, "the delivery load was obtained by
 inserting a restriction on the delivery line with the same diameter for all models".
-Here the restriction (an orifice to tank, eq. (21)) is sized once so that the
+Here the restriction (an orifice to tank, Eq. (21) of [1]) is sized once so that the
 fixed-centre model delivers at ``bar`` on average, and the same area is used for every
 model; the delivery line is a control volume (``boundary.delivery_volume_m3``).
 
@@ -33,7 +33,7 @@ def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SE
     """Orifice area [m²] that passes the fixed-centre pump's net delivery at ``bar`` gauge.
 
     The net flow to the restriction is the revolution-mean delivered flow (port flow
-    minus the suction–delivery and drain leakages) of the periodic state at imposed pressure; the area follows from eq. (21) of [1] with the
+    minus the suction–delivery and drain leakages) of the periodic state at imposed pressure; the area follows from Eq. (21) of [1] with the
     configured Cd(λ) law (solved with :func:`scipy.optimize.brentq`).
     """
     imposed = replace(cfg, boundary=replace(cfg.boundary, mode="imposed"))
