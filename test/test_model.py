@@ -16,11 +16,6 @@ from gerotor_twin.model.pump import Inputs, PumpModel
 from gerotor_twin.model.steady import reference_config, run_steady
 
 
-@pytest.fixture(scope="module")
-def tight_model(cfg):
-    return PumpModel(reference_config(cfg, tolerance=2e-6, max_step_deg=0.5), "fixed")
-
-
 def test_zero_clearance_delivers_theoretical_flow(cfg):
     """Closed form: with no clearance, mean delivery = displacement × speed (within 0.5 %).
 
@@ -41,12 +36,21 @@ def test_zero_clearance_delivers_theoretical_flow(cfg):
         assert r.mean_delivery_flow_m3s == pytest.approx(r.theoretical_flow_m3s, rel=5e-3)
 
 
-def test_mass_balance_closes_over_a_revolution(tight_model):
+@pytest.mark.slow
+def test_mass_balance_residual_vanishes_with_the_solver_tolerance(cfg):
+    """Behaviour: over a periodic revolution, mass in through the suction ports = mass out through the
+    delivery ports (the chambers return to the same state).  The log-density formulation has no
+    book-keeping error (ρ-weighted flows), so the residual is discretisation error only and falls
+    with the tolerance (measured 5.6e-4 → 6.9e-5 at 1000 rpm, 2.4e-4 → 2.1e-5 at 3000 rpm for
+    2e-6 → 2e-8); a constant-density book-keeping would stall at the compressibility, ≈ 1e-3.
+    """
     for rpm, bar in ((1000, 27.5), (3000, 10.0)):
-        r = run_steady(tight_model, rpm, bar)
-        o = r.outputs
-        # flow in − flow out − leakage; out = delivered = delivery ports − sd − drain
-        assert abs(o.port_mass_in - o.port_mass_out) / o.port_mass_in < 1e-3
+        res = []
+        for tol in (2e-6, 2e-8):
+            m = PumpModel(reference_config(cfg, tolerance=tol, max_step_deg=0.5), "fixed")
+            o = run_steady(m, rpm, bar, rtol=1e-7, max_revolutions=60).outputs
+            res.append(abs(o.port_mass_in - o.port_mass_out) / o.port_mass_in)
+        assert res[1] < 1e-4 and res[0] / res[1] > 5, res
 
 
 def test_efficiency_falls_with_pressure_and_rises_with_speed(fixed_model):
@@ -58,17 +62,24 @@ def test_efficiency_falls_with_pressure_and_rises_with_speed(fixed_model):
     assert all(0 < v < 1 for v in eta.values())
 
 
-def test_leakage_linear_in_dp_and_cubic_in_lateral_clearance(cfg):
-    """Lateral (sec. 3.3–3.4) leakage ∝ Δp and ∝ h³ (plane-gap Poiseuille)."""
-    leaks = {}
+def test_lateral_leakage_matches_the_sector_closed_forms(cfg):
+    """Closed form: suction–delivery (sec. 3.3) and drain (sec. 3.4) leakage of the running model against
+    plane-Poiseuille flow in annular sectors, both faces, written out here from the lateral geometry:
+    circumferential q = h³ Δp ln(r₂/r₁) / (12 μ χ), radial q = χ h³ Δp / (12 μ ln(r₂/r₁)).
+    """
     for h in (30e-6, 60e-6):
-        m = PumpModel(replace(cfg, clearances=replace(cfg.clearances, lateral_m=h)), "fixed")
+        c = replace(cfg, clearances=replace(cfg.clearances, lateral_m=h))
+        m = PumpModel(c, "fixed")
+        lat, mu = m.lateral, c.fluid.viscosity_pa_s
         for bar in (10.0, 20.0):
             inp = Inputs(1000 * math.pi / 30, 101325.0, 101325.0 + bar * 1e5)
-            s, o = m.advance(m.initial_state(inp), 0.002, inp)
-            leaks[(h, bar)] = float(np.mean(o.leak_suction_delivery + o.leak_drain))
-    assert leaks[(30e-6, 20.0)] / leaks[(30e-6, 10.0)] == pytest.approx(2.0, rel=1e-9)
-    assert leaks[(60e-6, 10.0)] / leaks[(30e-6, 10.0)] == pytest.approx(8.0, rel=1e-9)
+            _, o = m.advance(m.initial_state(inp), 0.002, inp)
+            dp = bar * 1e5
+            ring = math.log(lat.ring_r_out / lat.ring_r_in)
+            q_sd = 2 * sum(h ** 3 * dp * ring / (12 * mu * chi) for chi in (lat.chi1, lat.chi2))
+            q_dr = 2 * lat.chi3 * h ** 3 * dp / (12 * mu * math.log(lat.drain_r_out / lat.drain_r_in))
+            assert np.allclose(o.leak_suction_delivery, q_sd, rtol=1e-12)
+            assert np.allclose(o.leak_drain, q_dr, rtol=1e-12)
 
 
 def test_tip_leakage_grows_with_clearance(cfg):

@@ -47,7 +47,12 @@ def test_efficiency_json_schema(tables):
 
 
 def test_calibrated_fixed_centre_matches_tables_3_to_5(tables):
-    """Issue 4 acceptance: every point within ±2 pt, slope within 10 % at each speed."""
+    """Issue 4 acceptance, recomputed from the model: every point within ±2 pt, slope within 10 % at each speed.
+
+    In-sample: the two clearances were fitted to these 18 points (docs/calibration.json), so this
+    checks the fit, not a prediction; the out-of-sample checks are the structure below (slopes
+    ∝ 1/n) and the mobility rows, which were not fitted.
+    """
     fixed = [p for p in tables["points"] if p["model"] == "fixed"]
     for p in fixed:
         assert p["volumetric_efficiency"] == pytest.approx(p["paper"], abs=0.02), p
@@ -56,10 +61,20 @@ def test_calibrated_fixed_centre_matches_tables_3_to_5(tables):
     assert acceptance(fixed, row_slopes(fixed))["passed"]
 
 
+def test_model_slopes_scale_inverse_to_speed(tables):
+    """Structure, not fitted per speed: two global clearances give fixed-centre slopes ∝ 1/n.
+
+    The paper's rows do so within 3.5 % (test above); the model's slope × n must agree across
+    1000/2000/3000 rpm within 10 %, as leakage ∝ Δp at a swept volume ∝ n predicts.
+    """
+    fixed = [p for p in tables["points"] if p["model"] == "fixed"]
+    s = {r["rpm"]: r["slope_per_bar"] * r["rpm"] for r in row_slopes(fixed)}
+    assert max(s.values()) / min(s.values()) == pytest.approx(1.0, abs=0.10), s
+
+
 def test_config_uses_the_recorded_calibration(cfg):
     """config/pump.yaml carries the clearances of docs/calibration.json (to 0.01 µm)."""
     res = json.loads(DEFAULT_RESULT_PATH.read_text())
-    assert res["acceptance"]["passed"]
     assert cfg.clearances.tooth_tip_m == pytest.approx(res["tooth_tip_m"], abs=1e-8)
     assert cfg.clearances.lateral_m == pytest.approx(res["lateral_m"], abs=1e-8)
 
