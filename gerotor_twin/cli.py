@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+from .bearing.registry import MODEL_NAMES
 from .errors import InputError
 
 __all__ = ["main", "build_parser"]
@@ -195,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--rpm", type=float, required=True, help="shaft speed [rpm]")
     s.add_argument("--bar", type=float, required=True, help="delivery pressure [bar gauge]")
     s.add_argument("--revolutions", type=int, default=30, help="max revolutions to reach periodic state")
-    s.add_argument("--model", default="mobility", choices=("fixed", "mobility", "short", "fdm"),
+    s.add_argument("--model", default="mobility", choices=MODEL_NAMES,
                    help="outer-gear model (default: mobility, the twin's)")
     s.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     s.add_argument("--json", help="write the results to this JSON file")
@@ -204,7 +205,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", help="the main job of `make demo`")
     d.add_argument("--out", default="out/demo", help="output directory")
-    d.add_argument("--model", default="mobility", choices=("fixed", "mobility", "short", "fdm"))
+    d.add_argument("--model", default="mobility", choices=MODEL_NAMES)
     d.add_argument("--config", help="pump YAML")
     d.set_defaults(func=cmd_demo)
 

@@ -49,7 +49,9 @@ def test_writes_the_node_topics_with_physical_values(bench_bytes, tmp_path):
     assert np.all(np.abs(summ[:, 1] / qth - 1) < 2e-3)             # theoretical flow from the bench speed
     assert np.all((summ[:, 3] > 0.5) & (summ[:, 3] < 1.0))
     _, q_meas = scalar_series(s["/bench/delivery_flow"], "data")
-    assert abs(np.mean(summ[5:, 0]) / np.mean(q_meas[5:]) - 1) < 0.05  # twin vs emulated bench: same pump +-
+    # twin vs emulated bench: the bench pump leaks more (clearances × 1.1 → leakage × 1.33, ≈ 15 % of the
+    # flow here), so the twin over-predicts the delivered flow, by less than 10 %
+    assert 1.0 < np.mean(summ[5:, 0]) / np.mean(q_meas[5:]) < 1.10
     _, ex = scalar_series(s["/twin/eccentricity"], "vector.x")
     assert np.all(ex == 0.0)                                          # fixed centre
     # inputs are logged untouched, with their recorded times

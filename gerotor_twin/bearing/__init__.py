@@ -22,7 +22,8 @@ References
 .. [1] "Modelling of a Gerotor pump including the evaluation of the
    micro-movements of the external gear" (``../shared/paper``).
 """
-from gerotor_twin.bearing.base import MODEL_NAMES, BearingModel, make_bearing
+from gerotor_twin.bearing.base import BearingModel
+from gerotor_twin.bearing.registry import MODEL_NAMES, make_bearing
 from gerotor_twin.bearing.geometry import TABLE1, BearingGeometry
 from gerotor_twin.bearing.mobility import mobility_velocity
 from gerotor_twin.bearing.simulate import (EPS_CONTACT, BearingTrajectory, ContactEvent, settle,

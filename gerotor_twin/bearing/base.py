@@ -43,11 +43,7 @@ from gerotor_twin._jit import njit
 from gerotor_twin.bearing.geometry import BearingGeometry
 from gerotor_twin.errors import InputError, check_finite
 
-__all__ = ["BearingModel", "KernelBearing", "make_bearing", "MODEL_NAMES", "as_vector2",
-           "EPS_KERNEL_CAP", "cap_eccentricity"]
-
-#: Names accepted by :func:`make_bearing`.
-MODEL_NAMES = ("fixed", "mobility", "short", "fdm")
+__all__ = ["BearingModel", "KernelBearing", "as_vector2", "EPS_KERNEL_CAP", "cap_eccentricity"]
 
 #: Kernels evaluate the film at most at this eccentricity ratio (a state
 #: beyond it is scaled back radially).  Only a NaN guard for intermediate
@@ -159,37 +155,3 @@ class KernelBearing:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, geometry={self.geometry!r})"
-
-
-def make_bearing(name: str, geometry: BearingGeometry, **options: Any) -> BearingModel:
-    """Build a bearing model by name.
-
-    Parameters
-    ----------
-    name : str
-        ``"fixed"``, ``"mobility"``, ``"short"`` (Method 1) or ``"fdm"``.
-    geometry : BearingGeometry
-        Bearing [m, Pa s].
-    **options
-        Model options, e.g. ``nx=320, ny=40`` for ``"fdm"``,
-        ``n_nodes=24`` for ``"short"``.
-
-    Returns
-    -------
-    BearingModel
-    """
-    if name == "fixed":
-        from gerotor_twin.bearing.fixed import FixedBearing as cls
-    elif name == "mobility":
-        from gerotor_twin.bearing.mobility import MobilityBearing as cls
-    elif name == "short":
-        from gerotor_twin.bearing.short_bearing import ShortBearing as cls
-    elif name == "fdm":
-        from gerotor_twin.bearing.reynolds_fd import FdmBearing as cls
-    else:
-        raise InputError("bearing_model", name, " | ".join(MODEL_NAMES))
-    try:
-        return cls(geometry, **options)
-    except TypeError as exc:  # unknown option name
-        raise InputError("bearing_options", sorted(options), f"options of the {name!r} model",
-                         str(exc)) from None

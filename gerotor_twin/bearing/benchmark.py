@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gerotor_twin.bearing.base import make_bearing
+from gerotor_twin.bearing.registry import make_bearing
 from gerotor_twin.bearing.geometry import TABLE1, BearingGeometry
 from gerotor_twin.bearing.simulate import simulate
 from gerotor_twin.errors import InputError, check_range

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from gerotor_twin.bearing.base import make_bearing
+from gerotor_twin.bearing.registry import make_bearing
 from gerotor_twin.bearing.benchmark import (BENCH_EPS0, BENCH_METHODS, compare_with_ross,
                                             format_table, plot_trajectories, run_benchmark)
 from gerotor_twin.bearing.closed_form import ocvirk_attitude_angle, ocvirk_eccentricity

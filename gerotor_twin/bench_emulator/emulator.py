@@ -51,20 +51,21 @@ BENCH_TOPICS = {
 #: Metadata record describing how a file was synthesized.
 EMULATOR_METADATA = "gerotor_twin.bench_emulator"
 SHAFT_JOINT = "pump_shaft"
-#: Output step of the emulated pump [deg]: finer than the twin's default (1°), so the
-#: "bench" is the better-resolved of the two.
-EMULATOR_MAX_STEP_DEG = 0.5
+#: Numerics of the emulated pump, fixed (not the twin's defaults): 0.5° output steps and
+#: 5e-5 on ln(ρ/ρ₀), so the "bench" is the better-resolved of the two and a change of the
+#: twin's numerics does not change what the emulator writes.
+EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density"}
 
 
 def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
     """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-],
-    integrated at :data:`EMULATOR_MAX_STEP_DEG` (or finer, if the config asks for it)."""
+    integrated with :data:`EMULATOR_NUMERICS`."""
     if not (math.isfinite(factor) and 0.5 <= factor <= 2.0):
         raise InputError("clearance_factor", factor, "[0.5, 2]")
     raw = config.to_dict()
     raw["clearances"]["tooth_tip_m"] *= factor
     raw["clearances"]["lateral_m"] *= factor
-    raw["numerics"]["max_step_deg"] = min(raw["numerics"]["max_step_deg"], EMULATOR_MAX_STEP_DEG)
+    raw["numerics"].update(EMULATOR_NUMERICS)
     return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
 
 

@@ -5,6 +5,7 @@ import math
 import statistics
 import time
 
+from ..bearing.registry import MODEL_NAMES
 from .pump import Inputs, PumpModel
 
 __all__ = ["realtime", "models_cost"]
@@ -41,7 +42,7 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
     return rows
 
 
-def models_cost(config, models=("fixed", "mobility", "short", "fdm"), speeds=(1000, 3000), bar=27.5,
+def models_cost(config, models=MODEL_NAMES, speeds=(1000, 3000), bar=27.5,
                 revolutions=1, out=print) -> list[dict]:
     """Wall time per simulated revolution of each outer-gear model (sec. 4 of [1]: the cost).
 

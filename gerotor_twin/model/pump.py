@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..bearing.base import make_bearing
+from ..bearing.registry import MODEL_NAMES, make_bearing
 from ..bearing.geometry import BearingGeometry
 from ..config import PumpConfig
 from ..errors import InputError, check_finite
@@ -26,7 +26,7 @@ from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, N_FLOWS, kernel_model,
 
 __all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
 
-BEARING_MODELS = ("fixed", "mobility", "short", "fdm")
+BEARING_MODELS = MODEL_NAMES      #: the outer-gear models, by name (one list: bearing.registry)
 
 
 @dataclass(frozen=True)
@@ -136,7 +136,7 @@ class PumpModel:
     def __init__(self, config: PumpConfig, bearing: str = "mobility", bearing_options: dict | None = None,
                  tables: GeometryTables | None = None, progress=None):
         if bearing not in BEARING_MODELS:
-            raise InputError("--model", bearing, " | ".join(BEARING_MODELS))
+            raise InputError("bearing_model", bearing, " | ".join(BEARING_MODELS))
         self.config = config
         self.bearing_name = bearing
         g = config.gears

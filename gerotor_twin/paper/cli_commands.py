@@ -6,9 +6,9 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["register"]
+from gerotor_twin.bearing.registry import MODEL_NAMES as MODELS
 
-MODELS = ("fixed", "mobility", "short", "fdm")
+__all__ = ["register"]
 
 
 def _progress(done, total, pt):

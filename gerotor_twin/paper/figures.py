@@ -29,6 +29,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..bearing.registry import MODEL_NAMES  # noqa: E402
 from ..config import PumpConfig  # noqa: E402
 from ..model.pump import PumpModel  # noqa: E402
 from ..model.steady import run_steady  # noqa: E402
@@ -154,7 +155,7 @@ def _save(fig, path) -> Path:
     return path
 
 
-def write_figures(cfg: PumpConfig, out_dir, models=("fixed", "mobility", "short", "fdm"), progress=print):
+def write_figures(cfg: PumpConfig, out_dir, models=MODEL_NAMES, progress=print):
     """Write figs. 12–16 as PNG files into ``out_dir``; returns their paths."""
     out = Path(out_dir)
     runs = run_section4(cfg, models, progress=progress)

@@ -17,6 +17,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import brentq
 
+from ..bearing.registry import MODEL_NAMES
 from ..config import PumpConfig
 from ..hydraulics.orifice import orifice_flow
 from ..model.pump import Inputs, Outputs, PumpModel
@@ -46,7 +47,7 @@ def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SE
                                          f.viscosity_pa_s)[0] - q, 1e-10, 1e-2, xtol=1e-14)
 
 
-def run_section4(cfg: PumpConfig, models=("fixed", "mobility", "short", "fdm"), rpm: float = SECTION4_RPM,
+def run_section4(cfg: PumpConfig, models=MODEL_NAMES, rpm: float = SECTION4_RPM,
                  bar: float = SECTION4_BAR, progress=None) -> dict[str, SteadyResult]:
     """Periodic state of each model on the same restricted delivery line.
 
