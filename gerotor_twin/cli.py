@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
 
 from .bearing.registry import MODEL_NAMES
 from .errors import InputError
+from .units import m3s_to_lpm, pa_abs_to_bar_gauge
 
 __all__ = ["main", "build_parser"]
 
@@ -49,10 +51,8 @@ def cmd_geometry(args) -> int:
         "displacement_m3_per_rev": g.displacement_closed_form(),
         "min_chamber_volume_m3": float(vol.min()), "max_chamber_volume_m3": float(vol.max()),
         "min_convex_curvature_radius_m": g.min_convex_curvature_radius(),
-        "suction_port_deg": [round(v, 4) for v in (cfg.suction_port.start * 57.29577951308232,
-                                                    cfg.suction_port.end * 57.29577951308232)],
-        "delivery_port_deg": [round(v, 4) for v in (cfg.delivery_port.start * 57.29577951308232,
-                                                     cfg.delivery_port.end * 57.29577951308232)],
+        "suction_port_deg": [round(math.degrees(v), 4) for v in (cfg.suction_port.start, cfg.suction_port.end)],
+        "delivery_port_deg": [round(math.degrees(v), 4) for v in (cfg.delivery_port.start, cfg.delivery_port.end)],
     }
     print(f"Gerotor {g.chambers}/{g.chambers - 1} from {cfg.source}")
     for k, v in info.items():
@@ -83,12 +83,13 @@ def cmd_simulate(args) -> int:
     s["wall_time_s"] = time.perf_counter() - t0
     print(f"{args.model} model, {args.rpm:g} rpm, {args.bar:g} bar gauge "
           f"({s['revolutions']} revolutions to periodic state, {s['wall_time_s']:.2f} s)")
-    print(f"  theoretical flow        {s['theoretical_flow_m3s'] * 6e4:9.3f} L/min")
-    print(f"  mean delivery flow      {s['mean_delivery_flow_m3s'] * 6e4:9.3f} L/min")
+    print(f"  theoretical flow        {m3s_to_lpm(s['theoretical_flow_m3s']):9.3f} L/min")
+    print(f"  mean delivery flow      {m3s_to_lpm(s['mean_delivery_flow_m3s']):9.3f} L/min")
     print(f"  volumetric efficiency   {100 * s['volumetric_efficiency']:9.2f} %")
     print(f"  delivery flow ripple    {100 * s['delivery_flow_ripple']:9.2f} %")
-    print(f"  chamber pressure        {(s['min_chamber_pressure_pa'] - 101325) / 1e5:9.3f} .. "
-          f"{(s['max_chamber_pressure_pa'] - 101325) / 1e5:.3f} bar gauge")
+    p_atm = cfg.fluid.atmospheric_pa
+    print(f"  chamber pressure        {pa_abs_to_bar_gauge(s['min_chamber_pressure_pa'], p_atm):9.3f} .. "
+          f"{pa_abs_to_bar_gauge(s['max_chamber_pressure_pa'], p_atm):.3f} bar gauge")
     ex, ey = s["mean_eccentricity_m"]
     print(f"  mean eccentricity       ({ex * 1e6:.2f}, {ey * 1e6:.2f}) µm")
     print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm")

@@ -11,6 +11,7 @@ import numpy as np  # noqa: E402
 
 from ..geometry.chambers import chamber_polygon, contact_points  # noqa: E402
 from ..geometry.gerotor import GerotorGeometry  # noqa: E402
+from ..units import m3s_to_lpm, pa_abs_to_bar_gauge  # noqa: E402
 
 __all__ = ["plot_geometry", "plot_steady", "plot_efficiency_map"]
 
@@ -66,14 +67,15 @@ def plot_steady(result, path):
     o = result.outputs
     ang = np.degrees(o.theta - o.theta[0] + (o.theta[1] - o.theta[0]))
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7.5, 8.5), sharex=True)
-    a1.plot(ang, (o.chamber_pressures[:, 0] - 101325.0) / 1e5, label="chamber 1")
-    a1.plot(ang, (o.delivery_pressure - 101325.0) / 1e5, "k--", lw=0.8, label="delivery")
+    p_atm = result.p_atm
+    a1.plot(ang, pa_abs_to_bar_gauge(o.chamber_pressures[:, 0], p_atm), label="chamber 1")
+    a1.plot(ang, pa_abs_to_bar_gauge(o.delivery_pressure, p_atm), "k--", lw=0.8, label="delivery")
     a1.set_ylabel("gauge pressure [bar]")
     a1.legend(fontsize=8)
     a1.set_title(f"{result.model}: {result.rpm:g} rpm, {result.bar:g} bar, "
                  f"η_v = {100 * result.volumetric_efficiency:.2f} %")
-    a2.plot(ang, o.delivery_flow * 6e4, label="delivery flow")
-    a2.axhline(result.theoretical_flow_m3s * 6e4, color="k", ls=":", label="theoretical")
+    a2.plot(ang, m3s_to_lpm(o.delivery_flow), label="delivery flow")
+    a2.axhline(m3s_to_lpm(result.theoretical_flow_m3s), color="k", ls=":", label="theoretical")
     a2.set_ylabel("flow [L/min]")
     a2.legend(fontsize=8)
     a3.plot(ang, o.gaps[:, 0] * 1e6, label="tooth 1 gap")

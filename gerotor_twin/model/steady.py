@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
-from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
+from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
 
 __all__ = ["SteadyResult", "run_steady", "reference_config"]
@@ -26,6 +26,7 @@ class SteadyResult:
     mean_delivery_flow_m3s: float
     volumetric_efficiency: float
     periodicity_error: float    #: relative change of the mean flow over the last revolution [-]
+    p_atm: float = P_ATM        #: atmospheric pressure of the pump config (gauge zero) [Pa]
 
     @property
     def flow_ripple(self) -> float:
@@ -125,4 +126,4 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     qth = out.theoretical_flow
     return SteadyResult(rpm=rpm, bar=bar, model=model.bearing_name, revolutions=n, outputs=out, state=state,
                         theoretical_flow_m3s=qth, mean_delivery_flow_m3s=eta * qth, volumetric_efficiency=eta,
-                        periodicity_error=final_change)
+                        periodicity_error=final_change, p_atm=p_atm)
