@@ -12,16 +12,27 @@ module                   responsibility
 ``units``                rpm/bar/L-min conversions, used only at the edges
 ``geometry``             gerotor profiles, chambers (V, dV/dθ, l_x, l_y, arms),
                          ports, tooth-tip gaps (h, le, v_r), lateral gaps,
-                         overlap/contact of the displaced gears (sec. 3.7)
-``hydraulics``           fluid (β(p) eq. 23, ρ(p)), orifice (eq. 21, Cd(Re)),
-                         leakages (sec. 3.1–3.4)
+                         tables over the shaft angle
+``hydraulics``           fluid (β(p) Eq. (23)), state equation ln ρ ⇄ p,
+                         orifice (Eq. (21), Cd(λ)), leakages (sec. 3.1–3.4)
 ``bearing``              outer gear as a journal bearing: mobility, short
-                         bearing (Method 1), FDM Reynolds, fixed centre
-``model``                the pump: state, right-hand side (eq. 20), loads
-                         (eqs. 24–27), the stepper ``advance()``, results
+                         bearing (Method 1), FDM Reynolds, fixed centre;
+                         ``registry``: the model names and the factory
+``model``                the pump: ``params`` (config → kernel structures),
+                         ``flows`` (right-hand side, Eq. (20)), ``contact``
+                         (sec. 3.7), ``loads`` (Eqs. (24)–(27)), ``kernel``
+                         (stepper), ``pump`` (``PumpModel.advance``),
+                         ``steady``, ``accuracy``, ``bench``
+``twin``                 ROS-free twin core: inputs, clock driver, outputs,
+                         diagnostics (shared by the node and run-bag)
 ``io``                   MCAP read/write of ROS 2 messages without rclpy
+``offline``              run-bag: the twin core over a recording
 ``report``               bench-vs-twin alignment, metrics, figures, HTML
-``ros``                  rclpy node, replay: the only modules importing rclpy
+``paper``                section 4 of [1]: tables 3–5, calibration, figures
+``bench_emulator``       synth-bench: a pump that differs from the twin,
+                         seen through sensor models
+``ros``                  rclpy node, replay, demo, bench node: the only
+                         modules importing rclpy
 ``cli``                  the ``gerotor-twin`` command
 =======================  ==================================================
 
