@@ -140,25 +140,20 @@ class TwinNode(Node):
 
     def _open_log(self) -> None:
         prm = self.prm
+        self.log_counts = {"waveform": 0, "diagnostics": 0, "diag_level": -1, "before_clock": 0}
+        self.recovered_logs: list[str] = []
         if not prm["log_dir"]:
             return
-        from gerotor_twin.io import BackgroundMcapLog, McapLog, RotatingMcapLog
-        from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA
-        directory = Path(prm["log_dir"]).expanduser()
+        from gerotor_twin.io import BackgroundMcapLog
+        from gerotor_twin.io.background import Reopen
+        directory = log_directory(prm["log_dir"])
         directory.mkdir(parents=True, exist_ok=True)
-        stem = "twin_" + _dt.datetime.now().strftime("%Y%m%d_%H%M%S") + f"_{os.getpid()}"
-        meta = {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
-                "gerotor_twin.node_parameters": {k: repr(v) if isinstance(v, str) else str(v)
-                                                 for k, v in P.values(self).items()},
-                "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}}
-        comp = prm["log_compression"]
-        if prm["log_rotate_mb"] > 0 or prm["log_rotate_s"] > 0:
-            inner = RotatingMcapLog(directory, stem, compression=comp, metadata=meta,
-                                    max_bytes=int(prm["log_rotate_mb"] * 1e6) or None,
-                                    max_duration_s=prm["log_rotate_s"] or None)
-        else:
-            inner = McapLog(directory / f"{stem}.mcap", compression=comp, metadata=meta)
-        log = BackgroundMcapLog(inner, max_queue=prm["log_queue"])
+        self._recover_crashed_logs(directory)
+        self._log_files = 0
+        reopen = Reopen(lambda: self._new_log_file(directory), directory,
+                        int(prm["log_min_free_mb"] * 1e6), prm["log_retry_s"])
+        log = BackgroundMcapLog(self._new_log_file(directory), max_queue=prm["log_queue"],
+                                flush_interval_s=prm["log_flush_s"], fsync=prm["log_fsync"], reopen=reopen)
         for kind, sub in self.subs.items():
             log.add_topic(sub.topic_name, INPUTS[kind].msgtype, qos="sensor")
         for t, mt in OUTPUT_TOPICS.items():
@@ -166,6 +161,87 @@ class TwinNode(Node):
                 log.add_topic(self.fq[t], mt, qos="reliable")
         log.add_topic(self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, qos="reliable")
         self.log = log
+
+    def _new_log_file(self, directory: Path):
+        """A new MCAP file (or rotating set) in ``directory``; also called after a disk-full outage."""
+        from gerotor_twin.io import McapLog, RotatingMcapLog
+        from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA
+        prm = self.prm
+        stem = "twin_" + _dt.datetime.now().strftime("%Y%m%d_%H%M%S") + f"_{os.getpid()}"
+        stem += f"_r{self._log_files}" if self._log_files else ""
+        self._log_files += 1
+        meta = {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
+                "gerotor_twin.node_parameters": {k: repr(v) if isinstance(v, str) else str(v)
+                                                 for k, v in P.values(self).items()},
+                "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}}
+        opts = dict(compression=prm["log_compression"], metadata=meta, chunk_size=prm["log_chunk_kb"] * 1024)
+        if prm["log_rotate_mb"] > 0 or prm["log_rotate_s"] > 0:
+            return RotatingMcapLog(directory, stem, max_bytes=int(prm["log_rotate_mb"] * 1e6) or None,
+                                   max_duration_s=prm["log_rotate_s"] or None, **opts)
+        return McapLog(directory / f"{stem}.mcap", **opts)
+
+    def _recover_crashed_logs(self, directory: Path) -> None:
+        """Unfinalised logs of a crashed run in ``directory``: recover them beside the originals."""
+        from gerotor_twin.io.recover import unfinalised_logs
+        files = unfinalised_logs(directory)
+        if not files:
+            return
+        self.get_logger().warning(
+            f"{len(files)} unfinalised MCAP log(s) of a crashed run in {directory} "
+            f"({', '.join(p.name for p in files)}): recovering each beside the original as "
+            "<name>.recovered.mcap (in the background)")
+        threading.Thread(target=self._recover_files, args=(files,), name="mcap-recover", daemon=True).start()
+
+    def _recover_files(self, files) -> None:
+        from gerotor_twin.io.recover import recover
+        for p in files:
+            try:
+                rep = recover(p)
+            except Exception as exc:  # noqa: BLE001 - report, go on with the next file
+                self.get_logger().error(f"could not recover {p}: {exc}")
+                continue
+            self.recovered_logs.append(str(rep.output))
+            self.get_logger().warning(f"recovered {rep.summary()}")
+
+    def _log_due(self, topic: str, diag: dict | None = None) -> bool:
+        """Decimation of large / frequent outputs in the log (waveform, diagnostics)."""
+        c = self.log_counts
+        if topic == CHAMBER_WAVEFORM:
+            if not self.prm["log_waveforms"]:
+                return False
+            c["waveform"] += 1
+            return (c["waveform"] - 1) % self.prm["log_waveform_every"] == 0
+        if topic == DIAGNOSTICS_TOPIC and diag is not None:
+            level = max((int(st["level"]) for st in diag["status"]), default=0)
+            changed, c["diag_level"] = level != c["diag_level"], level
+            c["diagnostics"] += 1
+            return changed or (c["diagnostics"] - 1) % self.prm["log_diagnostics_every"] == 0
+        return True
+
+    def _clock_valid(self, now_ns: int) -> bool:
+        """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""
+        return now_ns > 0
+
+    def _log_status(self) -> tuple[int, str, dict]:
+        """Level, message and values of the MCAP log for the node's /diagnostics status."""
+        values = {"log_recovered": ", ".join(self.recovered_logs) or "none",
+                  "inputs_before_clock": self.log_counts["before_clock"]}
+        if self.log is None:
+            values["log_path"] = "off"
+            return m.DIAG_OK, "", values
+        st = self.log.stats()
+        values.update({"log_path": str(self.log.log.path), "log_written": st.written,
+                       "log_queue_depth": self.log.queue_depth, "log_dropped": st.dropped,
+                       "log_error": st.error or "", "log_resumed": st.resumed,
+                       "log_unfinalised": ", ".join(str(p) for p in self.log.unfinalised) or "none"})
+        if st.error:
+            return m.DIAG_ERROR, (f"MCAP log not written: {st.error}; {st.lost} message(s) lost so far; "
+                                  f"a new file starts when {self.prm['log_min_free_mb']:g} MB are free "
+                                  f"(checked every {self.prm['log_retry_s']:g} s)"), values
+        if st.dropped:
+            why = f" (resumed after {st.last_error})" if st.last_error else ""
+            return m.DIAG_WARN, f"MCAP log dropped {st.dropped} message(s){why}", values
+        return m.DIAG_OK, "", values
 
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
@@ -187,6 +263,9 @@ class TwinNode(Node):
     def _input_cb(self, kind: str, msgtype: str):
         def cb(data: bytes, info: dict) -> None:
             recv = self.get_clock().now().nanoseconds
+            if not self._clock_valid(recv):     # use_sim_time, no /clock yet: nothing stamped 0
+                self.log_counts["before_clock"] += 1
+                return
             log = self.log
             if log is not None:
                 src = info.get("source_timestamp") if isinstance(info, dict) else None
@@ -212,11 +291,13 @@ class TwinNode(Node):
             return
         with self._core_lock:
             now = self.get_clock().now().nanoseconds
+            if not self._clock_valid(now):
+                return
             res = self.core.tick(now)
         for out in res.messages:
             data = encode(out.msgtype, out.msg)
             self.pubs[out.topic].publish(data)
-            if self.log is not None and (out.topic != CHAMBER_WAVEFORM or self.prm["log_waveforms"]):
+            if self.log is not None and self._log_due(out.topic):
                 self.log.write_raw(self.fq[out.topic], data, out.stamp_ns, out.stamp_ns)
         logger = self.get_logger()
         for level, text in self.core.pop_events():
@@ -226,12 +307,14 @@ class TwinNode(Node):
         if self.stopping:
             return
         now = self.get_clock().now().nanoseconds
+        if not self._clock_valid(now):      # use_sim_time before the first /clock: nothing stamped 0
+            return
         extra = [self._node_status()]
         with self._core_lock:
             diag = self.core.diagnostics(now, extra)
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
         self.pubs[DIAGNOSTICS_TOPIC].publish(data)
-        if self.log is not None:
+        if self.log is not None and self._log_due(DIAGNOSTICS_TOPIC, diag):
             self.log.write_raw(self.fq[DIAGNOSTICS_TOPIC], data, now, now)
 
     def _node_status(self) -> dict:
@@ -240,15 +323,10 @@ class TwinNode(Node):
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
-        if self.log is not None:
-            st = self.log.stats()
-            values.update({"log_path": str(self.log.log.path), "log_written": st.written,
-                           "log_queue_depth": self.log.queue_depth, "log_dropped": st.dropped,
-                           "log_error": st.error or ""})
-            if st.dropped or st.error:
-                level, msg = m.DIAG_WARN, f"MCAP log dropped {st.dropped} message(s) {st.error or ''}".strip()
-        else:
-            values["log_path"] = "off"
+        log_level, log_msg, log_values = self._log_status()
+        values.update(log_values)
+        if log_level >= level and log_msg:
+            level, msg = log_level, log_msg
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
 
     # -------------------------------------------------------------- shutdown
@@ -258,6 +336,21 @@ class TwinNode(Node):
         if log is not None:
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
+
+
+def log_directory(value: str) -> Path:
+    """The ``log_dir`` parameter as a path: ``~`` and ``$VARS`` (e.g. ``$ROS_HOME``) expanded.
+
+    Raises
+    ------
+    InputError
+        A ``$VAR`` in it is not set.
+    """
+    expanded = os.path.expandvars(value)
+    if "$" in expanded:
+        raise InputError("log_dir", value, "a path whose environment variables are all set",
+                         f"after expansion: {expanded}")
+    return Path(expanded).expanduser()
 
 
 def main(argv=None) -> int:
