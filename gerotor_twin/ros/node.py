@@ -50,7 +50,8 @@ from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
-from gerotor_twin.twin.outputs import CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC  # noqa: E402
+from gerotor_twin.twin.outputs import (CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC, INSTANT_TOPICS,  # noqa: E402
+                                       SUMMARY_VALUE_TOPICS)
 from gerotor_twin.ros import params as P  # noqa: E402
 
 __all__ = ["TwinNode", "main"]
@@ -140,7 +141,7 @@ class TwinNode(Node):
 
     def _open_log(self) -> None:
         prm = self.prm
-        self.log_counts = {"waveform": 0, "diagnostics": 0, "diag_level": -1, "before_clock": 0}
+        self.log_counts = {"diag_level": -1, "before_clock": 0}
         self.recovered_logs: list[str] = []
         if not prm["log_dir"]:
             return
@@ -157,7 +158,7 @@ class TwinNode(Node):
         for kind, sub in self.subs.items():
             log.add_topic(sub.topic_name, INPUTS[kind].msgtype, qos="sensor")
         for t, mt in OUTPUT_TOPICS.items():
-            if t != CHAMBER_WAVEFORM or prm["log_waveforms"]:
+            if self._logged(t):
                 log.add_topic(self.fq[t], mt, qos="reliable")
         log.add_topic(self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, qos="reliable")
         self.log = log
@@ -203,20 +204,30 @@ class TwinNode(Node):
             self.recovered_logs.append(str(rep.output))
             self.get_logger().warning(f"recovered {rep.summary()}")
 
-    def _log_due(self, topic: str, diag: dict | None = None) -> bool:
-        """Decimation of large / frequent outputs in the log (waveform, diagnostics)."""
-        c = self.log_counts
+    def _logged(self, topic: str) -> bool:
+        """Whether an output topic goes to the log at all."""
         if topic == CHAMBER_WAVEFORM:
-            if not self.prm["log_waveforms"]:
-                return False
-            c["waveform"] += 1
-            return (c["waveform"] - 1) % self.prm["log_waveform_every"] == 0
+            return self.prm["log_waveforms"]
+        return topic not in SUMMARY_VALUE_TOPICS or self.prm["log_summary_values"]
+
+    def _log_due(self, topic: str, diag: dict | None = None) -> bool:
+        """Log decimation: every N-th waveform / instantaneous output / diagnostics message.
+
+        Inputs and ``twin/flow_summary`` are always logged; a /diagnostics message whose
+        highest level differs from the last logged one is always logged.
+        """
+        if not self._logged(topic):
+            return False
+        every = {CHAMBER_WAVEFORM: self.prm["log_waveform_every"],
+                 DIAGNOSTICS_TOPIC: self.prm["log_diagnostics_every"]}.get(
+            topic, self.prm["log_outputs_every"] if topic in INSTANT_TOPICS else 1)
+        c = self.log_counts
+        n = c[topic] = c.get(topic, 0) + 1
         if topic == DIAGNOSTICS_TOPIC and diag is not None:
             level = max((int(st["level"]) for st in diag["status"]), default=0)
             changed, c["diag_level"] = level != c["diag_level"], level
-            c["diagnostics"] += 1
-            return changed or (c["diagnostics"] - 1) % self.prm["log_diagnostics_every"] == 0
-        return True
+            return changed or (n - 1) % every == 0
+        return (n - 1) % every == 0
 
     def _clock_valid(self, now_ns: int) -> bool:
         """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""

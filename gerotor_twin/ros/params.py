@@ -60,8 +60,13 @@ PARAMETERS: tuple[Param, ...] = (
                          "'' = no log"),
     Param("log_compression", "zstd", "MCAP chunk compression", choices=("zstd", "lz4", "none")),
     Param("log_waveforms", True, "also log twin/chamber_waveform to MCAP (large) [-]"),
-    Param("log_waveform_every", 50, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
-    Param("log_diagnostics_every", 1, "log every N-th /diagnostics message (1 = all; ERROR/WARN changes "
+    Param("log_summary_values", False, "also log the twin/flow_summary/<name> Float64 topics (they repeat "
+                                       "twin/flow_summary, which the shipped layouts label by name) [-]"),
+    Param("log_waveform_every", 3000, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
+    Param("log_outputs_every", 5, "log every N-th publication of chamber pressures, delivery flow, "
+                                  "eccentricity, tooth gaps (1 = all; inputs and flow_summary: always all) [-]",
+          1, 1000000),
+    Param("log_diagnostics_every", 10, "log every N-th /diagnostics message (1 = all; ERROR/WARN changes "
                                       "are always logged) [-]", 1, 1000000),
     Param("log_rotate_mb", 100.0, "start a new MCAP file after this size [MB] (0 = never)", 0.0, 1e6),
     Param("log_rotate_s", 0.0, "start a new MCAP file after this duration [s] (0 = never)", 0.0, 1e7),

@@ -37,7 +37,8 @@ import numpy as np
 
 from gerotor_twin.io import messages as m
 
-__all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "DIAGNOSTICS_TOPIC",
+__all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
+           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "summary_messages",
            "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
@@ -58,6 +59,8 @@ OUTPUT_TOPICS: dict[str, str] = {
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
 }
 
+#: The outputs published at ``publish_rate_hz`` (instantaneous values).
+INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS)
 #: Order of the values in ``twin/flow_summary``.
 SUMMARY_FIELDS = ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")
 #: One std_msgs/Float64 topic per summary value: ``twin/flow_summary/<field>``.
