@@ -64,7 +64,7 @@ def _publish(domain: int, rpm: float, rate: float, seconds: float, proc, kinds=_
     from gerotor_twin.ros.node import _msg_class
 
     ctx = rclpy.Context()
-    rclpy.init(context=ctx, domain_id=domain)
+    rclpy.init(args=[], context=ctx, domain_id=domain)
     node = rclpy.create_node("bench_log_peer", context=ctx)
     pubs = {k: node.create_publisher(_msg_class(INPUTS[k].msgtype), INPUTS[k].topic, qos_profile_sensor_data)
             for k in kinds}
