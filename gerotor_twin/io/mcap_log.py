@@ -464,7 +464,8 @@ def _lock_for_writing(stream: IO[bytes]) -> None:
     try:
         fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
-        pass  # file systems without flock: recovery then relies on the writer's PID in the name
+        pass  # no flock here (some network file systems): a live file may then be copied by
+        # recovery too; recovery only reads the original, so the live file is never harmed
 
 
 def _close_current(current: list[McapLog]) -> None:
