@@ -27,7 +27,6 @@ What it does
 """
 from __future__ import annotations
 
-import datetime as _dt
 import os
 import signal
 import sys
@@ -50,8 +49,7 @@ from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
-from gerotor_twin.twin.outputs import (CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC, INSTANT_TOPICS,  # noqa: E402
-                                       SUMMARY_VALUE_TOPICS)
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
 __all__ = ["TwinNode", "main"]
@@ -140,119 +138,24 @@ class TwinNode(Node):
         self.model.advance(st, 1e-3, inp)
 
     def _open_log(self) -> None:
-        prm = self.prm
-        self.log_counts = {"diag_level": -1, "before_clock": 0}
-        self.recovered_logs: list[str] = []
-        if not prm["log_dir"]:
-            return
-        from gerotor_twin.io import BackgroundMcapLog
-        from gerotor_twin.io.background import Reopen
-        directory = log_directory(prm["log_dir"])
-        directory.mkdir(parents=True, exist_ok=True)
-        self._recover_crashed_logs(directory)
-        self._log_files = 0
-        reopen = Reopen(lambda: self._new_log_file(directory), directory,
-                        int(prm["log_min_free_mb"] * 1e6), prm["log_retry_s"])
-        log = BackgroundMcapLog(self._new_log_file(directory), max_queue=prm["log_queue"],
-                                flush_interval_s=prm["log_flush_s"], fsync=prm["log_fsync"], reopen=reopen)
-        for kind, sub in self.subs.items():
-            log.add_topic(sub.topic_name, INPUTS[kind].msgtype, qos="sensor")
-        for t, mt in OUTPUT_TOPICS.items():
-            if self._logged(t):
-                log.add_topic(self.fq[t], mt, qos="reliable")
-        log.add_topic(self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, qos="reliable")
-        self.log = log
+        """The MCAP log and its policy (files, crash recovery, decimation, status): ros/node_log.py."""
+        from gerotor_twin.ros.node_log import NodeLogFiles
+        self.log_files = NodeLogFiles(self.prm, self.get_logger(), self._log_metadata)
+        topics = [(sub.topic_name, INPUTS[kind].msgtype, "sensor") for kind, sub in self.subs.items()]
+        topics += [(self.fq[t], mt, "reliable") for t, mt in OUTPUT_TOPICS.items() if self.log_files.logged(t)]
+        topics.append((self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, "reliable"))
+        self.log = self.log_files.open(topics)
 
-    def _new_log_file(self, directory: Path):
-        """A new MCAP file (or rotating set) in ``directory``; also called after a disk-full outage."""
-        from gerotor_twin.io import McapLog, RotatingMcapLog
+    def _log_metadata(self) -> dict:
         from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA
-        prm = self.prm
-        stem = "twin_" + _dt.datetime.now().strftime("%Y%m%d_%H%M%S") + f"_{os.getpid()}"
-        stem += f"_r{self._log_files}" if self._log_files else ""
-        self._log_files += 1
-        meta = {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
+        return {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
                 "gerotor_twin.node_parameters": {k: repr(v) if isinstance(v, str) else str(v)
                                                  for k, v in P.values(self).items()},
                 "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}}
-        opts = dict(compression=prm["log_compression"], metadata=meta, chunk_size=prm["log_chunk_kb"] * 1024)
-        if prm["log_rotate_mb"] > 0 or prm["log_rotate_s"] > 0:
-            return RotatingMcapLog(directory, stem, max_bytes=int(prm["log_rotate_mb"] * 1e6) or None,
-                                   max_duration_s=prm["log_rotate_s"] or None, **opts)
-        return McapLog(directory / f"{stem}.mcap", **opts)
-
-    def _recover_crashed_logs(self, directory: Path) -> None:
-        """Unfinalised logs of a crashed run in ``directory``: recover them beside the originals."""
-        from gerotor_twin.io.recover import unfinalised_logs
-        files = unfinalised_logs(directory)
-        if not files:
-            return
-        self.get_logger().warning(
-            f"{len(files)} unfinalised MCAP log(s) of a crashed run in {directory} "
-            f"({', '.join(p.name for p in files)}): recovering each beside the original as "
-            "<name>.recovered.mcap (in the background)")
-        threading.Thread(target=self._recover_files, args=(files,), name="mcap-recover", daemon=True).start()
-
-    def _recover_files(self, files) -> None:
-        from gerotor_twin.io.recover import recover
-        for p in files:
-            try:
-                rep = recover(p)
-            except Exception as exc:  # noqa: BLE001 - report, go on with the next file
-                self.get_logger().error(f"could not recover {p}: {exc}")
-                continue
-            self.recovered_logs.append(str(rep.output))
-            self.get_logger().warning(f"recovered {rep.summary()}")
-
-    def _logged(self, topic: str) -> bool:
-        """Whether an output topic goes to the log at all."""
-        if topic == CHAMBER_WAVEFORM:
-            return self.prm["log_waveforms"]
-        return topic not in SUMMARY_VALUE_TOPICS or self.prm["log_summary_values"]
-
-    def _log_due(self, topic: str, diag: dict | None = None) -> bool:
-        """Log decimation: every N-th waveform / instantaneous output / diagnostics message.
-
-        Inputs and ``twin/flow_summary`` are always logged; a /diagnostics message whose
-        highest level differs from the last logged one is always logged.
-        """
-        if not self._logged(topic):
-            return False
-        every = {CHAMBER_WAVEFORM: self.prm["log_waveform_every"],
-                 DIAGNOSTICS_TOPIC: self.prm["log_diagnostics_every"]}.get(
-            topic, self.prm["log_outputs_every"] if topic in INSTANT_TOPICS else 1)
-        c = self.log_counts
-        n = c[topic] = c.get(topic, 0) + 1
-        if topic == DIAGNOSTICS_TOPIC and diag is not None:
-            level = max((int(st["level"]) for st in diag["status"]), default=0)
-            changed, c["diag_level"] = level != c["diag_level"], level
-            return changed or (n - 1) % every == 0
-        return (n - 1) % every == 0
 
     def _clock_valid(self, now_ns: int) -> bool:
         """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""
         return now_ns > 0
-
-    def _log_status(self) -> tuple[int, str, dict]:
-        """Level, message and values of the MCAP log for the node's /diagnostics status."""
-        values = {"log_recovered": ", ".join(self.recovered_logs) or "none",
-                  "inputs_before_clock": self.log_counts["before_clock"]}
-        if self.log is None:
-            values["log_path"] = "off"
-            return m.DIAG_OK, "", values
-        st = self.log.stats()
-        values.update({"log_path": str(self.log.log.path), "log_written": st.written,
-                       "log_queue_depth": self.log.queue_depth, "log_dropped": st.dropped,
-                       "log_error": st.error or "", "log_resumed": st.resumed,
-                       "log_unfinalised": ", ".join(str(p) for p in self.log.unfinalised) or "none"})
-        if st.error:
-            return m.DIAG_ERROR, (f"MCAP log not written: {st.error}; {st.lost} message(s) lost so far; "
-                                  f"a new file starts when {self.prm['log_min_free_mb']:g} MB are free "
-                                  f"(checked every {self.prm['log_retry_s']:g} s)"), values
-        if st.dropped:
-            why = f" (resumed after {st.last_error})" if st.last_error else ""
-            return m.DIAG_WARN, f"MCAP log dropped {st.dropped} message(s){why}", values
-        return m.DIAG_OK, "", values
 
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
@@ -275,7 +178,7 @@ class TwinNode(Node):
         def cb(data: bytes, info: dict) -> None:
             recv = self.get_clock().now().nanoseconds
             if not self._clock_valid(recv):     # use_sim_time, no /clock yet: nothing stamped 0
-                self.log_counts["before_clock"] += 1
+                self.log_files.before_clock += 1
                 return
             log = self.log
             if log is not None:
@@ -308,7 +211,7 @@ class TwinNode(Node):
         for out in res.messages:
             data = encode(out.msgtype, out.msg)
             self.pubs[out.topic].publish(data)
-            if self.log is not None and self._log_due(out.topic):
+            if self.log is not None and self.log_files.due(out.topic):
                 self.log.write_raw(self.fq[out.topic], data, out.stamp_ns, out.stamp_ns)
         logger = self.get_logger()
         for level, text in self.core.pop_events():
@@ -325,7 +228,7 @@ class TwinNode(Node):
             diag = self.core.diagnostics(now, extra)
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
         self.pubs[DIAGNOSTICS_TOPIC].publish(data)
-        if self.log is not None and self._log_due(DIAGNOSTICS_TOPIC, diag):
+        if self.log is not None and self.log_files.due(DIAGNOSTICS_TOPIC, diag):
             self.log.write_raw(self.fq[DIAGNOSTICS_TOPIC], data, now, now)
 
     def _node_status(self) -> dict:
@@ -334,7 +237,7 @@ class TwinNode(Node):
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
-        log_level, log_msg, log_values = self._log_status()
+        log_level, log_msg, log_values = self.log_files.status(self.log)
         values.update(log_values)
         if log_level >= level and log_msg:
             level, msg = log_level, log_msg
@@ -347,21 +250,6 @@ class TwinNode(Node):
         if log is not None:
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
-
-
-def log_directory(value: str) -> Path:
-    """The ``log_dir`` parameter as a path: ``~`` and ``$VARS`` (e.g. ``$ROS_HOME``) expanded.
-
-    Raises
-    ------
-    InputError
-        A ``$VAR`` in it is not set.
-    """
-    expanded = os.path.expandvars(value)
-    if "$" in expanded:
-        raise InputError("log_dir", value, "a path whose environment variables are all set",
-                         f"after expansion: {expanded}")
-    return Path(expanded).expanduser()
 
 
 def main(argv=None) -> int:
