@@ -4,7 +4,8 @@
 node so the node only wires it:
 
 * :meth:`NodeLogFiles.open` recovers the unfinalised logs of a crashed run in
-  ``log_dir`` (in a background thread, beside the originals, logged), then
+  ``log_dir`` (``gerotor-twin log recover`` in a low-priority child process,
+  beside the originals, logged), then
   opens a :class:`~gerotor_twin.io.background.BackgroundMcapLog` flushed every
   ``log_flush_s`` that resumes in a new file after a write error (disk full)
   once ``log_min_free_mb`` are free (checked every ``log_retry_s``);
@@ -20,6 +21,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import os
+import subprocess
+import sys
 import threading
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -122,15 +125,25 @@ class NodeLogFiles:
         threading.Thread(target=self._recover_files, args=(files,), name="mcap-recover", daemon=True).start()
 
     def _recover_files(self, files) -> None:
-        from gerotor_twin.io.recover import recover
+        """``gerotor-twin log recover`` per file in a child process at low priority.
+
+        A separate process, so the copy (≈ 4 MB/s of log on the dev machine) never
+        holds this process's GIL while the model runs in real time.
+        """
+        from gerotor_twin.io.recover import recovered_path
         for p in files:
             try:
-                rep = recover(p)
-            except Exception as exc:  # noqa: BLE001 - report, go on with the next file
+                r = subprocess.run([sys.executable, "-m", "gerotor_twin", "log", "recover", str(p)],
+                                   capture_output=True, text=True, preexec_fn=lambda: os.nice(10))
+            except OSError as exc:
                 self.logger.error(f"could not recover {p}: {exc}")
                 continue
-            self.recovered.append(str(rep.output))
-            self.logger.warning(f"recovered {rep.summary()}")
+            text = (r.stdout + r.stderr).strip()
+            if r.returncode != 0:
+                self.logger.error(f"could not recover {p}: {text[-500:]}")
+                continue
+            self.recovered.append(str(recovered_path(p)))
+            self.logger.warning(text[-1000:])
 
     # ------------------------------------------------------------- decimation
     def logged(self, topic: str) -> bool:
