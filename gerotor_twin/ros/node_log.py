@@ -133,13 +133,17 @@ class NodeLogFiles:
         from gerotor_twin.io.recover import recovered_path
         for p in files:
             try:
-                r = subprocess.run([sys.executable, "-m", "gerotor_twin", "log", "recover", str(p)],
-                                   capture_output=True, text=True, preexec_fn=lambda: os.nice(10))
+                child = subprocess.Popen([sys.executable, "-m", "gerotor_twin", "log", "recover", str(p)],
+                                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                try:
+                    os.setpriority(os.PRIO_PROCESS, child.pid, 10)
+                except OSError:
+                    pass  # already finished, or not permitted: run at normal priority
+                text = child.communicate()[0].strip()
             except OSError as exc:
                 self.logger.error(f"could not recover {p}: {exc}")
                 continue
-            text = (r.stdout + r.stderr).strip()
-            if r.returncode != 0:
+            if child.returncode != 0:
                 self.logger.error(f"could not recover {p}: {text[-500:]}")
                 continue
             self.recovered.append(str(recovered_path(p)))
