@@ -2,9 +2,11 @@
 
 The key list ``test/data/rosdep_keys_jazzy.yaml`` was checked against
 ros/rosdistro (``rosdep/python.yaml``, ``jazzy/distribution.yaml``; commit in
-the file); no network is used here.  The structure check follows REP 149:
-element order name, version, description, maintainer+, license+, url*,
-author*, dependencies*, then export; every dependency element holds one key.
+the file); no network is used here.  The structure check follows REP 149's
+schema (ros-infrastructure/rep ``xsd/package_format3.xsd``): the sequence
+name, version, description, maintainer+, license+, url*, author*, any of the
+dependency elements, group_depend*, member_of_group*, export?; name pattern
+``[a-z](_?[a-z0-9]+)*``; every dependency element holds one key.
 Every third-party module the package imports must be covered by a dependency.
 """
 from __future__ import annotations
@@ -20,9 +22,9 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 KEYS = yaml.safe_load((ROOT / "test" / "data" / "rosdep_keys_jazzy.yaml").read_text())
 DEPENDS = ("buildtool_depend", "buildtool_export_depend", "build_depend", "build_export_depend", "depend",
-           "exec_depend", "test_depend", "doc_depend", "conflict", "replace", "group_depend",
-           "member_of_group")
-ORDER = ("name", "version", "description", "maintainer", "license", "url", "author") + DEPENDS + ("export",)
+           "exec_depend", "test_depend", "doc_depend", "conflict", "replace")
+ORDER = ("name", "version", "description", "maintainer", "license", "url", "author") + DEPENDS + (
+    "group_depend", "member_of_group", "export")
 #: top-level module -> the key that provides it (a new third-party import must be added here and
 #: to package.xml with a verified key)
 MODULE_KEYS = {
@@ -55,7 +57,7 @@ def test_format3_structure_and_identity():
     assert tags.count("maintainer") >= 1 and tags.count("license") >= 1
     assert all(m.get("email") and "@" in m.get("email") for m in root.findall("maintainer"))
     name = root.findtext("name")
-    assert re.fullmatch(r"[a-z][a-z0-9_]*", name)
+    assert re.fullmatch(r"[a-z](_?[a-z0-9]+)*", name)
     setup = (ROOT / "setup.py").read_text()
     assert f'PACKAGE = "{name}"' in setup and (ROOT / "resource" / name).exists()
     version = root.findtext("version")
