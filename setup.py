@@ -14,6 +14,7 @@ setup(
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
         (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
+        (f"share/{PACKAGE}/layouts", glob("layouts/*.json") + glob("layouts/*.xml")),
     ],
     package_data={PACKAGE: ["data/*.yaml", "data/*.json"]},
     install_requires=["setuptools"],

@@ -233,6 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
     register_offline(sub)
     from .ros.cli_commands import register as register_node          # node, bench node
     register_node(sub)
+    from .io.cli_commands import register as register_log             # log recover
+    register_log(sub)
     return p
 
 

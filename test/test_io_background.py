@@ -110,7 +110,9 @@ def test_writer_thread_error_reported_not_hung(caplog: pytest.LogCaptureFixture)
     assert stats.lost == 5 and stats.written == 0 and "No space left" in stats.error
     assert isinstance(bg.error, OSError)
     assert any("No space left" in r.message for r in caplog.records)
-    assert open_mcap(buf).complete  # still finalised
+    with pytest.warns(TruncatedMcapWarning):   # left unfinalised at the error, readable up to it
+        f = open_mcap(buf)
+    assert not f.complete and f.profile == "ros2"
 
 
 def test_producer_errors_raised_in_caller():
@@ -206,3 +208,32 @@ def test_close_inside_a_write_is_deferred_to_its_end():
     assert seen == [False] and log.closed  # not closed mid-write, closed right after it
     f = open_mcap(buf)
     assert f.complete and f.message_count == 1
+
+
+class SlowLog(McapLog):
+    """A slow disk: 1 ms per message, so the writer thread's queue stays full."""
+
+    def write_raw(self, *args, **kwargs):
+        import time
+        time.sleep(0.001)
+        super().write_raw(*args, **kwargs)
+
+
+def test_periodic_flush_while_busy():
+    """With chunks never full (huge chunk_size) and the queue never empty, the file still grows
+    before the queue drains: the open chunk is written every flush_interval_s, busy or idle."""
+    import time
+    buf = io.BytesIO()
+    bg = BackgroundMcapLog(SlowLog(buf, chunk_size=1 << 30), flush_interval_s=0.05, poll_s=0.001)
+    bg.add_topic(TOPIC, m.FLOAT64)
+    start = len(buf.getvalue())
+    for k in range(3000):                            # about 3 s of work for the writer thread
+        assert bg.write(TOPIC, m.float64(float(k)), k + 1)
+    while len(buf.getvalue()) <= start + 100:       # grows only if a chunk was flushed
+        assert bg.queue_depth > 0, "the queue drained before any periodic flush"
+        time.sleep(0.001)
+    assert bg.queue_depth > 0                        # still busy when the chunk went to the file
+    with pytest.warns(TruncatedMcapWarning):
+        f = open_mcap(io.BytesIO(buf.getvalue()))   # the file as a kill would leave it
+    assert 0 < f.message_count < 3000
+    assert bg.close().written == 3000

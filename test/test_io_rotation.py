@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from rosbags.highlevel import AnyReader
 
 from gerotor_twin.errors import InputError
@@ -42,6 +43,8 @@ def check_files(log: RotatingMcapLog, n: int) -> list[Path]:
         f = open_mcap(p)
         assert f.complete
         assert set(f.topic_types()) == {"/bench/shaft_speed", "/twin/chamber_pressures"}
+        bag = yaml.safe_load(f.metadata.pop("rosbag2")["serialized_metadata"])
+        assert bag["message_count"] == f.message_count and bag["relative_file_paths"] == [p.name]
         assert f.metadata == {**META, "gerotor_twin.node_parameters": {"log_dir": "/tmp"}}
         total += f.message_count
         with AnyReader([p]) as r:
@@ -59,7 +62,8 @@ def test_rotation_by_size(tmp_path: Path):
         fill(log, n)
     paths = check_files(log, n)
     for p in paths[:-1]:
-        assert p.stat().st_size < 8192 + 2048 + 4096  # limit + one chunk + summary
+        record = len(open_mcap(p).metadata["rosbag2"]["serialized_metadata"])
+        assert p.stat().st_size < 8192 + 2048 + 4096 + record  # limit + one chunk + summary + rosbag2
 
 
 def test_rotation_by_duration(tmp_path: Path):

@@ -117,8 +117,9 @@ def test_roundtrip_every_type_in_memory():
             assert_same(s.messages[k], msg, f"{topic}[{k}]")
     f = open_mcap(buf)
     assert f.complete and f.profile == "ros2" and f.library == LIBRARY
-    assert f.metadata == {"gerotor_twin.pump_config": {"yaml": "z: 7\n"},
-                          "gerotor_twin.node_parameters": {"bearing_model": "mobility"}}
+    assert set(f.metadata) == {"gerotor_twin.pump_config", "gerotor_twin.node_parameters", "rosbag2"}
+    assert f.metadata["gerotor_twin.pump_config"] == {"yaml": "z: 7\n"}
+    assert f.metadata["gerotor_twin.node_parameters"] == {"bearing_model": "mobility"}
     assert f.message_count == sum(len(r) for _, _, r in samples.values())
 
 
@@ -239,7 +240,24 @@ def test_rosbag2_conventions_in_file(tmp_path: Path):
     assert summary.statistics.schema_count == len({t for t, _, _ in samples.values()})
     assert summary.chunk_indexes and all(ci.message_index_offsets for ci in summary.chunk_indexes)
     assert {ci.compression for ci in summary.chunk_indexes} == {"zstd"}
-    assert len(summary.metadata_indexes) == 2
+    assert [mi.name for mi in summary.metadata_indexes] == [
+        "gerotor_twin.pump_config", "gerotor_twin.node_parameters", "rosbag2"]
+    # the rosbag2 record, as rosbag2_storage_mcap writes it (BagMetadata v9, ros2/rosbag2 jazzy)
+    with open(path, "rb") as f:
+        (meta,) = [r.metadata for r in make_reader(f).iter_metadata() if r.name == "rosbag2"]
+    assert set(meta) == {"serialized_metadata"}
+    bag = yaml.safe_load(meta["serialized_metadata"])
+    assert list(bag) == ["version", "storage_identifier", "duration", "starting_time", "message_count",
+                         "topics_with_message_count", "compression_format", "compression_mode",
+                         "relative_file_paths", "files", "custom_data", "ros_distro"]
+    assert bag["version"] == 9 and bag["ros_distro"] == "jazzy" and bag["storage_identifier"] == "mcap"
+    times = [t for _, _, rows in samples.values() for t, _ in rows]
+    assert bag["starting_time"] == {"nanoseconds_since_epoch": min(times)}
+    assert bag["duration"] == {"nanoseconds": max(times) - min(times)}
+    assert bag["message_count"] == len(times) and bag["relative_file_paths"] == ["twin.mcap"]
+    by_topic = {t["topic_metadata"]["name"]: t for t in bag["topics_with_message_count"]}
+    assert {k: v["message_count"] for k, v in by_topic.items()} == {
+        k: len(rows) for k, (_, _, rows) in samples.items()}
     share = Path(message_definition(m.JOINT_STATE).msg_path).parents[2]
     for ch in summary.channels.values():
         msgtype, qos, _ = samples[ch.topic]
@@ -255,6 +273,10 @@ def test_rosbag2_conventions_in_file(tmp_path: Path):
         hashes = json.loads((share / pkg / "msg" / f"{typ}.json").read_text())["type_hashes"]
         assert ch.metadata["topic_type_hash"] == next(
             h["hash_string"] for h in hashes if h["type_name"] == msgtype)
+        tm = by_topic[ch.topic]["topic_metadata"]
+        assert tm == {"name": ch.topic, "type": msgtype, "serialization_format": "cdr",
+                      "offered_qos_profiles": yaml.safe_load(ch.metadata["offered_qos_profiles"]),
+                      "type_description_hash": ch.metadata["topic_type_hash"]}
 
 
 def test_writer_rejects_bad_input(tmp_path: Path):

@@ -90,6 +90,24 @@ def test_mean_flow_matches_offline_model(model, steady_run):
     assert sums[-1].msg["layout"]["dim"][0]["label"] == SUMMARY_LABEL
 
 
+def test_summary_values_on_named_float64_topics(model, steady_run):
+    """Each flow-summary value also on twin/flow_summary/<name> (findable by name in Foxglove/PlotJuggler)."""
+    from gerotor_twin.model.steady import run_steady
+    core, msgs = steady_run
+    named = {t: of(msgs, f"twin/flow_summary/{t}") for t in
+             ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")}
+    sums = of(msgs, "twin/flow_summary")
+    assert all(len(v) == len(sums) and OUTPUT_TOPICS[f"twin/flow_summary/{t}"] == m.FLOAT64
+               for t, v in named.items())
+    last = {t: v[-1].msg["data"] for t, v in named.items()}
+    assert all(v[-1].stamp_ns == sums[-1].stamp_ns for v in named.values())
+    ref = run_steady(model, 2000, 20)
+    assert last["mean_delivery_m3s"] == pytest.approx(ref.mean_delivery_flow_m3s, rel=2e-3)
+    assert last["theoretical_m3s"] == pytest.approx(model.theoretical_flow(W), rel=1e-9)
+    assert last["leakage_m3s"] == pytest.approx(last["theoretical_m3s"] - last["mean_delivery_m3s"], rel=1e-9)
+    assert last["volumetric_efficiency"] == pytest.approx(ref.volumetric_efficiency, rel=2e-3)
+
+
 def test_outputs_physical_and_encodable(model, steady_run):
     core, msgs = steady_run
     no_nan(msgs)

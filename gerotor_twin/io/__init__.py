@@ -17,14 +17,18 @@ module              responsibility
                     DiagnosticArray, Clock; ``stamp_from_ns``
 ``mcap_log``        :class:`McapLog` (one file/stream), :class:`RotatingMcapLog`
 ``background``      :class:`BackgroundMcapLog`: writer thread, bounded queue,
-                    counted drops, signal-safe ``close()``
+                    counted drops, periodic flush, resume after a write error
+                    (:class:`~gerotor_twin.io.background.Reopen`), signal-safe ``close()``
+``rosbag2_meta``    the ``rosbag2`` Metadata record (BagMetadata v9, ``ros_distro: jazzy``)
+``recover``         :func:`~gerotor_twin.io.recover.recover` (``gerotor-twin log recover``),
+                    :func:`~gerotor_twin.io.recover.unfinalised_logs` of dead writers
 ``reader``          :func:`open_mcap` (clear errors, truncated-file recovery),
                     :func:`read_topics` -> :class:`TopicSeries`, :func:`require`,
                     :func:`scalar_series`, :func:`multiarray_series`, metadata
 ==================  =============================================================
 
 Imports point one way: schemas, qos <- codec <- mcap_log <- background;
-messages, schemas <- reader.  Nothing here imports rclpy.
+rosbag2_meta <- mcap_log; messages, schemas <- reader; reader, mcap_log <- recover.  Nothing here imports rclpy.
 """
 from gerotor_twin.io.background import BackgroundMcapLog, LogStats
 from gerotor_twin.io.mcap_log import McapLog, McapLogClosed, RotatingMcapLog

@@ -16,9 +16,19 @@ Queue full
     :data:`STATS_METADATA`.
 After close
     Writes return False and are counted as ``dropped_after_close``.
-Writer-thread I/O error
-    Logged once; the message and all later ones are counted as ``lost``;
-    :attr:`BackgroundMcapLog.error` holds the exception.
+Writer-thread I/O error (e.g. disk full)
+    Logged once; the file is closed without finalising (what reached it stays
+    recoverable: ``gerotor-twin log recover``); the message and all later
+    ones are counted as ``lost`` while :attr:`BackgroundMcapLog.error` holds
+    the exception.  With a :class:`Reopen` policy, every ``retry_s`` the
+    thread checks the free space of the log directory and, once at least
+    ``min_free_bytes`` are free, continues in the new file its factory
+    returns (:attr:`LogStats.resumed` counts this, ``error`` is cleared,
+    ``last_error`` keeps the reason).
+Flushing
+    The open chunk is written and the file flushed at least every
+    ``flush_interval_s`` (busy or idle), so a crash of the process loses at
+    most that much plus the queue; ``fsync=True`` also survives a power cut.
 close()
     Stops accepting, lets the thread drain the queue, write the stats record
     and finalise the file, and waits for that up to ``timeout_s``.  It takes
@@ -31,17 +41,19 @@ from __future__ import annotations
 import collections
 import itertools
 import logging
+import shutil
 import threading
 import time
 import weakref
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Union
+from pathlib import Path
+from typing import Any, Callable, Mapping, Union
 
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.mcap_log import McapLog, RotatingMcapLog, _check_time
 from gerotor_twin.io.qos import QosSpec
 
-__all__ = ["STATS_METADATA", "LogStats", "BackgroundMcapLog"]
+__all__ = ["STATS_METADATA", "LogStats", "Reopen", "BackgroundMcapLog"]
 
 #: Name of the Metadata record with the writer's counters, written at close.
 STATS_METADATA = "gerotor_twin.log_stats"
@@ -67,7 +79,11 @@ class LogStats:
     max_queue_depth : int
         Highest queue length seen.
     error : str or None
-        Writer-thread error, if any.
+        Writer-thread error, if one is current (cleared when logging resumes).
+    resumed : int
+        Times logging resumed in a new file after an error.
+    last_error : str or None
+        The most recent writer-thread error, current or past.
     """
 
     queued: int
@@ -77,6 +93,8 @@ class LogStats:
     lost: int = 0
     max_queue_depth: int = 0
     error: str | None = None
+    resumed: int = 0
+    last_error: str | None = None
 
     @property
     def dropped(self) -> int:
@@ -92,14 +110,53 @@ class LogStats:
         out.update({f"dropped_queue_full/{k}": str(v) for k, v in self.dropped_queue_full.items()})
         if self.error:
             out["error"] = self.error
+        if self.last_error:
+            out.update(resumed=str(self.resumed), last_error=self.last_error)
         return out
+
+
+@dataclass(frozen=True)
+class Reopen:
+    """How the writer thread resumes after a write error (e.g. disk full).
+
+    Attributes
+    ----------
+    factory : callable
+        Returns a new, open log (a new file; called in the writer thread).
+    directory : Path
+        Where free space is checked.
+    min_free_bytes : int
+        Free space needed before a new file is opened [bytes].
+    retry_s : float
+        Period of the check [s].
+    """
+
+    factory: Callable[[], Any]
+    directory: Path
+    min_free_bytes: int = 16_000_000
+    retry_s: float = 5.0
+
+    def free_bytes(self) -> int:
+        """Free space available to this process in :attr:`directory` [bytes] (0 if unknown)."""
+        try:
+            return int(shutil.disk_usage(self.directory).free)
+        except OSError:
+            return 0
 
 
 class _Pump:
     """State shared by the producer side and the writer thread (no reference to the wrapper)."""
 
-    def __init__(self, log: AnyLog, max_queue: int, poll_s: float, flush_interval_s: float | None):
+    def __init__(self, log: AnyLog, max_queue: int, poll_s: float, flush_interval_s: float | None,
+                 reopen: Reopen | None = None, fsync: bool = False):
         self.log = log
+        self.reopen = reopen
+        self.fsync = fsync
+        self.resumed = 0
+        self.last_error: BaseException | None = None
+        self.next_retry = 0.0
+        self.unfinalised: list[Any] = []          # paths of files closed unfinalised
+        self.topics: dict[str, tuple[str, Any]] = {}   # registered topics, for a resumed file
         self.queue: collections.deque[Any] = collections.deque()
         self.max_queue = max_queue
         self.poll_s = poll_s
@@ -121,17 +178,33 @@ class _Pump:
     def stats(self) -> LogStats:
         return LogStats(self.n_queued - self.retracted, self.written, dict(self.dropped),
                         self.dropped_after_close, self.lost, self.max_depth,
-                        None if self.error is None else repr(self.error))
+                        None if self.error is None else repr(self.error), self.resumed,
+                        None if self.last_error is None else repr(self.last_error))
+
+    def _fail(self, exc: BaseException) -> None:
+        """A write error: stop writing this file, keep what it holds (unfinalised), report once."""
+        self.error = self.last_error = exc
+        path = getattr(self.log, "path", None)
+        try:
+            self.log.abandon()
+        except Exception:  # noqa: BLE001 - the file is broken already
+            pass
+        self.unfinalised.append(path)
+        retry = "" if self.reopen is None else (
+            f"; a new file is started when {self.reopen.min_free_bytes / 1e6:g} MB are free again "
+            f"(checked every {self.reopen.retry_s:g} s)")
+        _log.error("MCAP writer thread: %s; %s left unfinalised (recover it with `gerotor-twin log "
+                   "recover`); messages are counted as lost%s", exc, path, retry)
+        self.next_retry = time.monotonic() + (self.reopen.retry_s if self.reopen else 0.0)
 
     def _handle(self, item: Any) -> None:
         kind, args = item
         if kind == "flush":
             try:
                 if self.error is None:
-                    self.log.flush()
+                    self.log.flush(self.fsync)
             except Exception as exc:
-                self.error = exc
-                _log.error("MCAP writer thread: %s; further messages are lost", exc)
+                self._fail(exc)
             if args is not None:
                 args.set()
             return
@@ -146,29 +219,51 @@ class _Pump:
             else:
                 self.log.add_metadata(*args)
         except Exception as exc:  # keep the thread alive; report once
-            self.error = exc
             self.lost += kind == "msg"
-            _log.error("MCAP writer thread: %s; further messages are lost", exc)
+            self._fail(exc)
+
+    def _maybe_resume(self, now: float) -> None:
+        """After a write error: every ``retry_s``, open a new file if there is space again."""
+        r = self.reopen
+        if r is None or now < self.next_retry:
+            return
+        self.next_retry = now + r.retry_s
+        if r.free_bytes() < r.min_free_bytes:
+            return
+        try:
+            new = r.factory()
+            for topic, (msgtype, qos) in self.topics.items():
+                new.add_topic(topic, msgtype, qos)
+        except Exception as exc:  # noqa: BLE001 - still no space, permissions...: retry later
+            _log.warning("MCAP log not resumed yet: %s", exc)
+            return
+        self.log, self.error = new, None
+        self.resumed += 1
+        _log.warning("MCAP log resumed in %s after: %s (%d message(s) lost meanwhile)",
+                     getattr(new, "path", "?"), self.last_error, self.lost)
 
     def run(self) -> None:
         last_flush = time.monotonic()
         while True:
+            now = time.monotonic()
+            if self.error is not None:
+                self._maybe_resume(now)
+            elif self.flush_interval_s is not None and now - last_flush >= self.flush_interval_s:
+                self._handle(("flush", None))
+                last_flush = now
             try:
                 item = self.queue.popleft()
             except IndexError:
                 if self.stopping:
                     break
-                now = time.monotonic()
-                if (self.flush_interval_s is not None and self.error is None
-                        and now - last_flush >= self.flush_interval_s):
-                    self._handle(("flush", None))
-                    last_flush = now
                 time.sleep(self.poll_s)
                 continue
             self._handle(item)
         self._finish()
 
     def _finish(self) -> None:
+        if self.error is not None:
+            return  # the file was closed unfinalised at the error
         try:
             if self.error is None:
                 self.log.add_metadata(STATS_METADATA, self.stats().as_metadata())
@@ -205,13 +300,18 @@ class BackgroundMcapLog:
     block_s : float
         How long a producer may wait for room in a full queue before dropping [s].
     flush_interval_s : float or None
-        Write the open chunk at least this often when idle [s] (limits loss on a crash).
+        Write the open chunk and flush the file at least this often [s] (bounds the loss on a crash).
     poll_s : float
         Writer-thread poll period when the queue is empty [s].
+    reopen : Reopen, optional
+        Resume in a new file after a write error (e.g. disk full); default: stay stopped.
+    fsync : bool
+        ``os.fsync`` at each periodic flush (survive a power cut, not only a process crash).
     """
 
     def __init__(self, log: AnyLog, *, max_queue: int = 10_000, block_s: float = 0.0,
-                 flush_interval_s: float | None = 5.0, poll_s: float = 0.01):
+                 flush_interval_s: float | None = 5.0, poll_s: float = 0.01,
+                 reopen: Reopen | None = None, fsync: bool = False):
         if isinstance(max_queue, bool) or not isinstance(max_queue, int) or max_queue < 1:
             raise InputError("max_queue", max_queue, "an integer >= 1")
         if not 0.0 <= block_s <= 10.0:
@@ -222,14 +322,16 @@ class BackgroundMcapLog:
             raise InputError("poll_s", poll_s, "(0, 1] s")
         self._log = log
         self._block_s = float(block_s)
-        self._pump = _Pump(log, max_queue, poll_s, flush_interval_s)
+        self._pump = _Pump(log, max_queue, poll_s, flush_interval_s, reopen, fsync)
         self._pump.thread.start()
         self._finalizer = weakref.finalize(self, self._pump.stop, 30.0)
 
     # -- set-up (synchronous, before or between messages) ----------------------------------
     def add_topic(self, topic: str, msgtype: str, qos: QosSpec = "reliable") -> int:
         """Register a topic at once (see :meth:`McapLog.add_topic`)."""
-        return self._log.add_topic(topic, msgtype, qos)
+        cid = self._pump.log.add_topic(topic, msgtype, qos)
+        self._pump.topics.setdefault(topic, (msgtype, qos))
+        return cid
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> bool:
         """Queue a Metadata record (not subject to the queue bound); False after close."""
@@ -345,9 +447,14 @@ class BackgroundMcapLog:
 
     @property
     def log(self) -> AnyLog:
-        """The wrapped log (read its ``path``/``paths``; write only through this wrapper)."""
-        return self._log
+        """The log being written (read its ``path``/``paths``; write only through this wrapper)."""
+        return self._pump.log
+
+    @property
+    def unfinalised(self) -> list:
+        """Files closed unfinalised after a write error (recover them with ``log recover``)."""
+        return list(self._pump.unfinalised)
 
     @property
     def topics(self) -> dict[str, str]:
-        return self._log.topics
+        return self._pump.log.topics

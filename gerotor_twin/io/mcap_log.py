@@ -22,6 +22,8 @@ writing off the executor thread see :mod:`~gerotor_twin.io.background`.
 from __future__ import annotations
 
 import contextlib
+import fcntl
+import functools
 import operator
 import os
 import re
@@ -29,7 +31,7 @@ import threading
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any, Iterator, Mapping, Union
+from typing import IO, Any, Callable, Iterator, Mapping, Union
 
 import mcap_ros2
 from mcap.writer import LIBRARY_IDENTIFIER as _MCAP_LIBRARY
@@ -39,6 +41,7 @@ from gerotor_twin import __version__
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.codec import encoder_for
 from gerotor_twin.io.qos import QosSpec, resolve_qos
+from gerotor_twin.io.rosbag2_meta import ROSBAG2_METADATA, TopicCount, rosbag2_record
 from gerotor_twin.io.schemas import SCHEMA_ENCODING, message_definition, normalize_msgtype
 
 __all__ = [
@@ -95,6 +98,14 @@ class _Topic:
     qos: str
     channel_id: int
     sequence: int = 0
+    type_hash: str = ""
+
+
+def _bag_metadata(name: str, compression: str, topics: dict[str, _Topic], counts: dict[str, int],
+                  span: list) -> dict[str, str]:
+    """The ``rosbag2`` record of a file from the writer's own bookkeeping (no McapLog reference)."""
+    return rosbag2_record(name, [TopicCount(k, t.msgtype, t.qos, t.type_hash, counts.get(k, 0))
+                                 for k, t in topics.items()], span[0], span[1], compression)
 
 
 class _Sink:
@@ -105,11 +116,14 @@ class _Sink:
     deferred to the end of the interrupted operation instead of corrupting it.
     """
 
-    def __init__(self, writer: Writer, stream: IO[bytes], own_stream: bool, name: str):
+    def __init__(self, writer: Writer, stream: IO[bytes], own_stream: bool, name: str,
+                 final_metadata: Callable[[], dict[str, str]] | None = None):
         self.writer = writer
         self.stream = stream
         self.own_stream = own_stream
         self.name = name
+        self.final_metadata = final_metadata
+        self.abandoned = False
         self.lock = threading.RLock()
         self.owner: int | None = None
         self.closed = False
@@ -139,14 +153,27 @@ class _Sink:
                 return
             self.owner = threading.get_ident()
             try:
+                if self.abandoned:      # after a write error: keep the valid prefix as it is
+                    return
+                if self.final_metadata is not None:
+                    self.writer.add_metadata(ROSBAG2_METADATA, self.final_metadata())
                 self.writer.finish()
             finally:
                 self.closed = True
                 self.owner = None
                 if self.own_stream:
-                    self.stream.close()
+                    _close_quietly(self.stream, raise_error=not self.abandoned)
                 else:
                     self.stream.flush()
+
+
+def _close_quietly(stream: IO[bytes], raise_error: bool) -> None:
+    """Close a file; after a write error the unwritable buffer is discarded, not raised again."""
+    try:
+        stream.close()
+    except OSError:
+        if raise_error:
+            raise
 
 
 class McapLog:
@@ -193,6 +220,7 @@ class McapLog:
                 raise InputError("path", str(self._path), "a file that does not exist yet",
                                  "pass overwrite=True to replace it") from None
             own, name = True, str(self._path)
+            _lock_for_writing(stream)
         else:
             self._path, stream, own, name = None, output, False, f"<{type(output).__name__}>"
         try:
@@ -201,17 +229,18 @@ class McapLog:
             if own:
                 stream.close()
             raise
-        self._sink = _Sink(writer, stream, own, name)
+        self._topics: dict[str, _Topic] = {}
+        self._counts: dict[str, int] = {}
+        self._span: list = [None, None]     # first, last message log time [ns]
+        final = functools.partial(_bag_metadata, Path(name).name if own else name, compression,
+                                  self._topics, self._counts, self._span)
+        self._sink = _Sink(writer, stream, own, name, final)
         # Finalise the file if the log is garbage-collected or the interpreter exits unclosed.
         self._finalizer = weakref.finalize(self, self._sink.close)
         if not close_at_exit:
             self._finalizer.detach()
         self._stream = stream
-        self._topics: dict[str, _Topic] = {}
         self._schema_ids: dict[str, int] = {}
-        self._counts: dict[str, int] = {}
-        self._first_ns: int | None = None
-        self._last_ns: int | None = None
         self._tell = self._safe_tell()
         self._unflushed = 0
         with self._sink.guard() as w:
@@ -258,7 +287,8 @@ class McapLog:
             channel_id = w.register_channel(
                 topic, MESSAGE_ENCODING, schema_id,
                 {"offered_qos_profiles": qos_yaml, "topic_type_hash": definition.type_hash})
-            self._topics[topic] = _Topic(definition.msgtype, qos_yaml, channel_id)
+            self._topics[topic] = _Topic(definition.msgtype, qos_yaml, channel_id,
+                                         type_hash=definition.type_hash)
             self._counts[topic] = 0
         return channel_id
 
@@ -320,8 +350,9 @@ class McapLog:
             seq = t.sequence if sequence is None else operator.index(sequence)
             w.add_message(t.channel_id, log_ns, payload, pub_ns, seq % _U32)
             self._counts[topic] += 1
-            self._first_ns = log_ns if self._first_ns is None else min(self._first_ns, log_ns)
-            self._last_ns = log_ns if self._last_ns is None else max(self._last_ns, log_ns)
+            span = self._span
+            span[0] = log_ns if span[0] is None else min(span[0], log_ns)
+            span[1] = log_ns if span[1] is None else max(span[1], log_ns)
             tell = self._safe_tell()
             if tell != self._tell:  # a chunk (with this message) went to the stream
                 self._tell, self._unflushed = tell, 0
@@ -329,11 +360,29 @@ class McapLog:
                 self._unflushed += len(payload) + _MESSAGE_OVERHEAD
 
     # -- lifetime -------------------------------------------------------------------------
-    def flush(self) -> None:
-        """Write the open chunk and flush the stream (data then survives a crash)."""
+    def flush(self, fsync: bool = False) -> None:
+        """Write the open chunk and flush the stream (data then survives a crash of the process).
+
+        Parameters
+        ----------
+        fsync : bool
+            Also ``os.fsync`` the file (survives a power cut; costs a disk round trip).
+        """
         with self._sink.guard() as w:
             w.flush()
             self._tell, self._unflushed = self._safe_tell(), 0
+            if fsync and self._sink.own_stream:
+                os.fsync(self._stream.fileno())
+
+    def abandon(self) -> None:
+        """Close without finalising, after a write error (e.g. disk full); idempotent.
+
+        What reached the file stays as it is: readable with
+        :func:`~gerotor_twin.io.reader.open_mcap` and made a finalised copy by
+        :func:`~gerotor_twin.io.recover.recover` (``gerotor-twin log recover``).
+        """
+        self._sink.abandoned = True
+        self.close()
 
     def close(self) -> None:
         """Finalise (summary, statistics, indexes, footer) and close; idempotent, signal-safe.
@@ -381,11 +430,11 @@ class McapLog:
 
     @property
     def first_log_time_ns(self) -> int | None:
-        return self._first_ns
+        return self._span[0]
 
     @property
     def last_log_time_ns(self) -> int | None:
-        return self._last_ns
+        return self._span[1]
 
     @property
     def size_estimate(self) -> int:
@@ -404,6 +453,19 @@ class McapLog:
             return self._stream.tell()
         except (OSError, ValueError):
             return 0
+
+
+def _lock_for_writing(stream: IO[bytes]) -> None:
+    """Hold an exclusive ``flock`` on a file being written, so that recovery skips live files.
+
+    The lock goes with the process: after a crash (SIGKILL, power cut) nobody
+    holds it and :func:`gerotor_twin.io.recover.unfinalised_logs` may recover the file.
+    """
+    try:
+        fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        pass  # no flock here (some network file systems): a live file may then be copied by
+        # recovery too; recovery only reads the original, so the live file is never harmed
 
 
 def _close_current(current: list[McapLog]) -> None:
@@ -524,14 +586,19 @@ class RotatingMcapLog:
             self._rotate_if_due(_check_time("log_time_ns", log_time_ns))
             self._log.write_raw(topic, data, log_time_ns, publish_time_ns, sequence=sequence)
 
-    def flush(self) -> None:
+    def flush(self, fsync: bool = False) -> None:
         with self._lock:
-            self._log.flush()
+            self._log.flush(fsync)
 
     def close(self) -> None:
         """Close the current file (idempotent, signal-safe like :meth:`McapLog.close`)."""
         self._finalizer()
         self._log.close()
+
+    def abandon(self) -> None:
+        """Close the current file without finalising it (see :meth:`McapLog.abandon`)."""
+        self._finalizer.detach()
+        self._log.abandon()
 
     def __enter__(self) -> "RotatingMcapLog":
         return self

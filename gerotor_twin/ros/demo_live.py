@@ -63,7 +63,9 @@ def main(argv=None) -> int:
           f"(ROS_DOMAIN_ID={args.domain_id})", flush=True)
     node = subprocess.Popen(
         [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file", str(ROOT / "config" / "twin.yaml"),
-         "-p", "use_sim_time:=true", "-p", f"log_dir:={log_dir}", "-p", f"bearing_model:={args.model}"],
+         "-p", "use_sim_time:=true", "-p", f"log_dir:={log_dir}", "-p", f"bearing_model:={args.model}",
+         # a short showcase: log every output (the defaults decimate them for hours-long runs)
+         "-p", "log_outputs_every:=1", "-p", "log_waveform_every:=1", "-p", "log_diagnostics_every:=1"],
         cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []
     ready = threading.Event()

@@ -27,7 +27,6 @@ What it does
 """
 from __future__ import annotations
 
-import datetime as _dt
 import os
 import signal
 import sys
@@ -50,7 +49,7 @@ from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
-from gerotor_twin.twin.outputs import CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC  # noqa: E402
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
 __all__ = ["TwinNode", "main"]
@@ -139,33 +138,24 @@ class TwinNode(Node):
         self.model.advance(st, 1e-3, inp)
 
     def _open_log(self) -> None:
-        prm = self.prm
-        if not prm["log_dir"]:
-            return
-        from gerotor_twin.io import BackgroundMcapLog, McapLog, RotatingMcapLog
+        """The MCAP log and its policy (files, crash recovery, decimation, status): ros/node_log.py."""
+        from gerotor_twin.ros.node_log import NodeLogFiles
+        self.log_files = NodeLogFiles(self.prm, self.get_logger(), self._log_metadata)
+        topics = [(sub.topic_name, INPUTS[kind].msgtype, "sensor") for kind, sub in self.subs.items()]
+        topics += [(self.fq[t], mt, "reliable") for t, mt in OUTPUT_TOPICS.items() if self.log_files.logged(t)]
+        topics.append((self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, "reliable"))
+        self.log = self.log_files.open(topics)
+
+    def _log_metadata(self) -> dict:
         from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA
-        directory = Path(prm["log_dir"]).expanduser()
-        directory.mkdir(parents=True, exist_ok=True)
-        stem = "twin_" + _dt.datetime.now().strftime("%Y%m%d_%H%M%S") + f"_{os.getpid()}"
-        meta = {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
+        return {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
                 "gerotor_twin.node_parameters": {k: repr(v) if isinstance(v, str) else str(v)
                                                  for k, v in P.values(self).items()},
                 "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}}
-        comp = prm["log_compression"]
-        if prm["log_rotate_mb"] > 0 or prm["log_rotate_s"] > 0:
-            inner = RotatingMcapLog(directory, stem, compression=comp, metadata=meta,
-                                    max_bytes=int(prm["log_rotate_mb"] * 1e6) or None,
-                                    max_duration_s=prm["log_rotate_s"] or None)
-        else:
-            inner = McapLog(directory / f"{stem}.mcap", compression=comp, metadata=meta)
-        log = BackgroundMcapLog(inner, max_queue=prm["log_queue"])
-        for kind, sub in self.subs.items():
-            log.add_topic(sub.topic_name, INPUTS[kind].msgtype, qos="sensor")
-        for t, mt in OUTPUT_TOPICS.items():
-            if t != CHAMBER_WAVEFORM or prm["log_waveforms"]:
-                log.add_topic(self.fq[t], mt, qos="reliable")
-        log.add_topic(self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, qos="reliable")
-        self.log = log
+
+    def _clock_valid(self, now_ns: int) -> bool:
+        """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""
+        return now_ns > 0
 
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
@@ -187,6 +177,9 @@ class TwinNode(Node):
     def _input_cb(self, kind: str, msgtype: str):
         def cb(data: bytes, info: dict) -> None:
             recv = self.get_clock().now().nanoseconds
+            if not self._clock_valid(recv):     # use_sim_time, no /clock yet: nothing stamped 0
+                self.log_files.before_clock += 1
+                return
             log = self.log
             if log is not None:
                 src = info.get("source_timestamp") if isinstance(info, dict) else None
@@ -212,11 +205,13 @@ class TwinNode(Node):
             return
         with self._core_lock:
             now = self.get_clock().now().nanoseconds
+            if not self._clock_valid(now):
+                return
             res = self.core.tick(now)
         for out in res.messages:
             data = encode(out.msgtype, out.msg)
             self.pubs[out.topic].publish(data)
-            if self.log is not None and (out.topic != CHAMBER_WAVEFORM or self.prm["log_waveforms"]):
+            if self.log is not None and self.log_files.due(out.topic):
                 self.log.write_raw(self.fq[out.topic], data, out.stamp_ns, out.stamp_ns)
         logger = self.get_logger()
         for level, text in self.core.pop_events():
@@ -226,12 +221,14 @@ class TwinNode(Node):
         if self.stopping:
             return
         now = self.get_clock().now().nanoseconds
+        if not self._clock_valid(now):      # use_sim_time before the first /clock: nothing stamped 0
+            return
         extra = [self._node_status()]
         with self._core_lock:
             diag = self.core.diagnostics(now, extra)
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
         self.pubs[DIAGNOSTICS_TOPIC].publish(data)
-        if self.log is not None:
+        if self.log is not None and self.log_files.due(DIAGNOSTICS_TOPIC, diag):
             self.log.write_raw(self.fq[DIAGNOSTICS_TOPIC], data, now, now)
 
     def _node_status(self) -> dict:
@@ -240,15 +237,10 @@ class TwinNode(Node):
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
-        if self.log is not None:
-            st = self.log.stats()
-            values.update({"log_path": str(self.log.log.path), "log_written": st.written,
-                           "log_queue_depth": self.log.queue_depth, "log_dropped": st.dropped,
-                           "log_error": st.error or ""})
-            if st.dropped or st.error:
-                level, msg = m.DIAG_WARN, f"MCAP log dropped {st.dropped} message(s) {st.error or ''}".strip()
-        else:
-            values["log_path"] = "off"
+        log_level, log_msg, log_values = self.log_files.status(self.log)
+        values.update(log_values)
+        if log_level >= level and log_msg:
+            level, msg = log_level, log_msg
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
 
     # -------------------------------------------------------------- shutdown

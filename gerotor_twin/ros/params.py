@@ -56,13 +56,29 @@ PARAMETERS: tuple[Param, ...] = (
     Param("waveform_every", 1, "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",
           0, 10000),
     Param("waveform_samples", 360, "shaft-angle samples of the waveform per revolution [-]", 8, 100000),
-    Param("log_dir", "", "directory of the MCAP log (one file per run); '' = no log"),
+    Param("log_dir", "", "directory of the MCAP log (one file per run); '~' and $VARS are expanded; "
+                         "'' = no log"),
     Param("log_compression", "zstd", "MCAP chunk compression", choices=("zstd", "lz4", "none")),
     Param("log_waveforms", True, "also log twin/chamber_waveform to MCAP (large) [-]"),
-    Param("log_rotate_mb", 0.0, "start a new MCAP file after this size [MB] (0 = never)", 0.0, 1e6),
+    Param("log_summary_values", False, "also log the twin/flow_summary/<name> Float64 topics (they repeat "
+                                       "twin/flow_summary, which the shipped layouts label by name) [-]"),
+    Param("log_waveform_every", 500, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
+    Param("log_outputs_every", 5, "log every N-th publication of chamber pressures, delivery flow, "
+                                  "eccentricity, tooth gaps (1 = all; inputs and flow_summary: always all) [-]",
+          1, 1000000),
+    Param("log_diagnostics_every", 10, "log every N-th /diagnostics message (1 = all; ERROR/WARN changes "
+                                      "are always logged) [-]", 1, 1000000),
+    Param("log_rotate_mb", 100.0, "start a new MCAP file after this size [MB] (0 = never)", 0.0, 1e6),
     Param("log_rotate_s", 0.0, "start a new MCAP file after this duration [s] (0 = never)", 0.0, 1e7),
     Param("log_queue", 200000, "background MCAP writer queue [messages] (overflow is counted and dropped)",
           100, 10000000),
+    Param("log_flush_s", 0.2, "write the open chunk to the file at least this often [s]: what a kill of "
+                              "the process can lose", 0.01, 60.0),
+    Param("log_chunk_kb", 1024, "MCAP chunk size that triggers a write before log_flush_s [KiB]", 1, 65536),
+    Param("log_fsync", False, "fsync the log at each flush (also survives a power cut; more disk load) [-]"),
+    Param("log_min_free_mb", 50.0, "after a write error (disk full) a new log file is started once this much "
+                                   "space is free [MB]", 0.0, 1e6),
+    Param("log_retry_s", 5.0, "period of the free-space check after a write error [s]", 0.1, 3600.0),
 )
 
 

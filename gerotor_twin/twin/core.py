@@ -466,7 +466,7 @@ class TwinCore:
                 q, qth = dv / T, disp / T
                 vals = (q, qth, qth - q, dv / disp)
                 if O.all_finite(vals):
-                    res.messages.append(O.summary(stamp, vals))
+                    res.messages.extend(O.summary_messages(stamp, vals))
                     self._last_summary = vals
                 else:
                     self.stats["nonfinite_suppressed"] += 1

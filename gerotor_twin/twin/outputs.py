@@ -10,6 +10,10 @@ topic (relative)            type                             content (SI)
                                                              :data:`SUMMARY_LABEL`: revolution-mean
                                                              delivery, theoretical, leakage [m³/s],
                                                              volumetric efficiency [-]
+``twin/flow_summary/<name>`` std_msgs/Float64                 the same four values, one topic each, named
+                                                             by :data:`SUMMARY_FIELDS` (so Foxglove and
+                                                             PlotJuggler, which show a multi-array as
+                                                             ``data[0..3]``, find each by name)
 ``twin/eccentricity``       geometry_msgs/Vector3Stamped     outer-gear centre displacement [m],
                                                              frame ``pump_housing`` (z = 0)
 ``twin/tooth_gaps``         std_msgs/Float64MultiArray       N minimum tooth-tip gap heights [m] since
@@ -33,7 +37,8 @@ import numpy as np
 
 from gerotor_twin.io import messages as m
 
-__all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "DIAGNOSTICS_TOPIC",
+__all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
+           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "summary_messages",
            "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
@@ -54,8 +59,13 @@ OUTPUT_TOPICS: dict[str, str] = {
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
 }
 
+#: The outputs published at ``publish_rate_hz`` (instantaneous values).
+INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS)
 #: Order of the values in ``twin/flow_summary``.
 SUMMARY_FIELDS = ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")
+#: One std_msgs/Float64 topic per summary value: ``twin/flow_summary/<field>``.
+SUMMARY_VALUE_TOPICS = tuple(f"{FLOW_SUMMARY}/{f}" for f in SUMMARY_FIELDS)
+OUTPUT_TOPICS.update({t: m.FLOAT64 for t in SUMMARY_VALUE_TOPICS})
 #: Its layout label (the field names, comma separated).
 SUMMARY_LABEL = ",".join(SUMMARY_FIELDS)
 
@@ -89,6 +99,13 @@ def summary(stamp_ns: int, values) -> OutputMessage:
     """``twin/flow_summary`` (values in :data:`SUMMARY_FIELDS` order)."""
     return OutputMessage(FLOW_SUMMARY, m.FLOAT64_MULTIARRAY, stamp_ns,
                          m.float64_multiarray(values, (SUMMARY_LABEL,)))
+
+
+def summary_messages(stamp_ns: int, values) -> list[OutputMessage]:
+    """``twin/flow_summary`` and one ``twin/flow_summary/<field>`` Float64 per value."""
+    return [summary(stamp_ns, values)] + [
+        OutputMessage(topic, m.FLOAT64, stamp_ns, m.float64(float(v)))
+        for topic, v in zip(SUMMARY_VALUE_TOPICS, values)]
 
 
 def waveform(stamp_ns: int, table) -> OutputMessage:
