@@ -89,7 +89,8 @@ class TwinNode(Node):
         self.settings = TwinSettings(
             sample_period_s=sp, publish_period_s=every * sp, max_span_s=prm["max_span_s"],
             stale_timeout_s=prm["stale_timeout_s"], filter_tau_s=prm["input_filter_tau_s"],
-            stamp_restart_s=prm["stamp_restart_s"], waveform_every=prm["waveform_every"],
+            stamp_restart_s=prm["stamp_restart_s"], stamp_ahead_s=prm["stamp_ahead_s"],
+            stamp_rebase_samples=prm["stamp_rebase_samples"], waveform_every=prm["waveform_every"],
             waveform_samples=prm["waveform_samples"])
         self.core = TwinCore(self.model, self.settings)
         self._warm_up(Inputs)

@@ -64,6 +64,10 @@ PARAMETERS: tuple[Param, ...] = (
     Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),
     Param("stamp_restart_s", 1.0, "a header stamp this much older than the last one is a source restart [s]",
           0.0, 3600.0),
+    Param("stamp_ahead_s", 0.5, "a header stamp this much further ahead of its receive time than the stream's "
+                                "usual offset is implausible: that sample alone is rejected [s]", 0.001, 3600.0),
+    Param("stamp_rebase_samples", 3, "consecutive consistent samples rejected for their stamp after which the "
+                                     "stamp order re-anchors on them [samples]", 1, 1000),
     Param("max_span_s", 0.25, "lag policy: most clock time integrated per tick; older backlog is skipped [s]",
           0.001, 3600.0),
     Param("waveform_every", 1, "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",

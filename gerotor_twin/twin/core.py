@@ -47,6 +47,15 @@ rate-limited in :meth:`TwinCore.pop_events`)
       accepted value is held.  Slightly negative speeds are clamped to 0.
     * A stamp far older than the last one (``> stamp_restart_s``) is a restart
       of the source: accepted.
+    * A stamp implausibly ahead of its receive time (more than
+      ``stamp_ahead_s`` beyond the stream's usual offset) is rejected by itself
+      (``future_stamp``); the good stream that follows is accepted.  After
+      ``stamp_rebase_samples`` consecutive consistent samples rejected for
+      their stamp, the order re-anchors on them, so one bad stamp never blocks
+      the stream (:mod:`gerotor_twin.twin.stamps`).
+    * A header stamp of 0 (source does not stamp) is counted per input
+      (``zero_stamps``), reported (WARN on diagnostics in a period where it
+      happened) and the sample taken as unstamped.
     * A required input (speed, delivery pressure) not received, or older than
       ``stale_timeout_s``: the model is **held** (state frozen, nothing
       published, diagnostics STALE) until a fresh sample arrives; then it
@@ -82,6 +91,7 @@ from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
 from gerotor_twin.twin.settings import NS, TwinSettings
+from gerotor_twin.twin.stamps import REBASE, RESTART, StampGuard
 
 __all__ = ["TwinCore", "TickResult"]
 
@@ -129,7 +139,8 @@ class TwinCore:
         self._lock = threading.Lock()
         s = self.settings
         self._S = s.sample_ns
-        self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s) for k, spec in INPUTS.items()}
+        self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s, self._stamp_guard())
+                          for k, spec in INPUTS.items()}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
@@ -192,7 +203,8 @@ class TwinCore:
         value : float
             The value in that unit.
         stamp_ns : int or None
-            Header stamp [ns] (``None``: unstamped, no order check).
+            Header stamp [ns] (``None``: unstamped, no order check; ``0``: a zero
+            header stamp, counted and reported, then as unstamped).
         receive_ns : int
             Clock time of reception [ns] (same clock as :meth:`tick`).
 
@@ -206,26 +218,55 @@ class TwinCore:
         receive_ns = int(receive_ns)
         with self._lock:
             ch = self._channels[kind]
-            restarts = ch.stamp_restarts
-            reason = ch.check_stamp(stamp_ns, int(round(self.settings.stamp_restart_s * NS)))
-            if reason is not None:
-                what = "equal to" if reason == "duplicate_stamp" else "older than"
-                err = InputError(f"{kind}.header.stamp", stamp_ns,
-                                 f"newer than the last accepted stamp {ch.last_stamp} ns",
-                                 f"{what} it: sample dropped")
-                self._reject(ch, reason, str(err), receive_ns)
+            if stamp_ns == 0:
+                stamp_ns = self._zero_stamp(ch, receive_ns)
+            verdict = ch.check_stamp(stamp_ns, receive_ns)
+            if verdict not in (None, RESTART, REBASE):
+                self._reject(ch, verdict, self._stamp_error(ch, verdict, stamp_ns, receive_ns), receive_ns)
                 return False
             try:
                 value = self._validate(kind, value, ch)
             except _Rejected as rej:
                 self._reject(ch, rej.reason, rej.text, receive_ns)
                 return False
-            if ch.stamp_restarts != restarts:
-                self._report(kind, "stamp_restart", 1,
-                             f"{kind}: header stamp went back by more than {self.settings.stamp_restart_s:g} s; "
-                             "taken as a restart of the source", receive_ns)
-            ch.add(value, stamp_ns, receive_ns)
+            if verdict is not None:
+                self._report(kind, "stamp_" + verdict, 1, self._stamp_note(kind, verdict), receive_ns)
+            ch.add(value, stamp_ns, receive_ns, verdict)
         return True
+
+    # ---------------------------------------------------------- stamp checks
+    def _stamp_guard(self) -> StampGuard:
+        s = self.settings
+        return StampGuard(restart_ns=int(round(s.stamp_restart_s * NS)), ahead_ns=int(round(s.stamp_ahead_s * NS)),
+                          rebase_after=s.stamp_rebase_samples)
+
+    def _zero_stamp(self, ch: InputChannel, receive_ns: int) -> None:  # returns the stamp to use: None
+        """A header stamp of 0: counted, reported, the sample taken as unstamped (no order check)."""
+        ch.zero_stamps += 1
+        self._report(ch.spec.kind, "zero_stamp", 1, f"{ch.spec.kind}: header stamp 0 (the source does not stamp "
+                     "its messages): taken as unstamped, its order cannot be checked", receive_ns)
+        return None
+
+    def _stamp_error(self, ch: InputChannel, reason: str, stamp_ns: int, receive_ns: int) -> str:
+        kind = ch.spec.kind
+        if reason == "future_stamp":
+            usual = ch.guard.usual_offset(receive_ns) or 0.0
+            return str(InputError(f"{kind}.header.stamp", stamp_ns,
+                                  f"at most {self.settings.stamp_ahead_s:g} s ahead of its receive time "
+                                  f"{receive_ns} ns (+ the usual offset {usual / NS:.6g} s)",
+                                  f"{(stamp_ns - receive_ns - usual) / NS:.6g} s ahead: implausible, this "
+                                  "sample alone dropped"))
+        what = "equal to" if reason == "duplicate_stamp" else "older than"
+        return str(InputError(f"{kind}.header.stamp", stamp_ns,
+                              f"newer than the last accepted stamp {ch.last_stamp} ns", f"{what} it: sample dropped"))
+
+    def _stamp_note(self, kind: str, verdict: str) -> str:
+        if verdict == RESTART:
+            return (f"{kind}: header stamp went back by more than {self.settings.stamp_restart_s:g} s; "
+                    "taken as a restart of the source")
+        return (f"{kind}: {self.settings.stamp_rebase_samples} consecutive consistent samples after stamp "
+                "rejections: stamp order re-anchored on them (the earlier stamp was the outlier, or the "
+                "source clock jumped)")
 
     def _validate(self, kind: str, value: float, ch: InputChannel) -> float:
         try:
@@ -539,7 +580,8 @@ class TwinCore:
                 out[k] = {"value": None if last is None else last[0],
                           "age_s": None if last is None else (now_ns - last[1]) / NS,
                           "accepted": ch.accepted, "clamped": ch.clamped, "rejected": dict(ch.rejected),
-                          "stamp_restarts": ch.stamp_restarts, "last_error": ch.last_error}
+                          "stamp_restarts": ch.stamp_restarts, "stamp_rebases": ch.stamp_rebases,
+                          "zero_stamps": ch.zero_stamps, "last_error": ch.last_error}
         return out
 
     def snapshot(self, now_ns: int) -> dict[str, Any]:
@@ -589,6 +631,7 @@ class TwinCore:
         counts["skips"] = snap["skips"]
         for k, info in snap["inputs"].items():
             counts[f"rejected.{k}"] = sum(info["rejected"].values())
+            counts[f"zero_stamps.{k}"] = info["zero_stamps"]
         prev = self._win["counts"]
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}
