@@ -16,7 +16,13 @@ What it does
       encodes every output once with the project codec, publishes those bytes
       (reliable QoS) and logs the same bytes (``log_time`` = prediction time);
     * publishes ``/diagnostics`` (core statuses + MCAP log status) at
-      ``diagnostics_rate_hz``, and once as soon as it is ready;
+      ``diagnostics_rate_hz``, and once as soon as it is ready; under
+      ``use_sim_time`` on a wall-clock (steady) timer, so a ``/clock`` that
+      stops is reported (``clock stalled``, WARN, stamped with the last clock
+      time); nothing is published before the first ``/clock``;
+    * more than one publisher on an input topic: the first source is followed
+      (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs)
+      are listed and WARNed on ``/diagnostics``;
     * one single-threaded executor: a tick integrates at most ``max_span_s``
       (lag policy), inputs wait in the subscription history
       (``input_queue_depth``) meanwhile; rclpy's multi-threaded executor was
@@ -45,10 +51,11 @@ from rclpy.node import Node  # noqa: E402
 from rclpy.qos import (HistoryPolicy, QoSProfile, ReliabilityPolicy, DurabilityPolicy)  # noqa: E402
 from rclpy.signals import SignalHandlerOptions  # noqa: E402
 
-from gerotor_twin.errors import InputError, one_line  # noqa: E402
+from gerotor_twin.errors import InputError, clip, one_line  # noqa: E402
 from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
+from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
 from gerotor_twin.twin.outputs import CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
@@ -123,8 +130,9 @@ class TwinNode(Node):
         self._open_log()
         self.tick_timer = self.create_timer(1.0 / prm["tick_rate_hz"], self._safe(self._tick),
                                             callback_group=self._tick_group)
+        self.clock_watch = ClockWatch(prm["clock_stall_s"])
         self.diag_timer = self.create_timer(1.0 / prm["diagnostics_rate_hz"], self._safe(self._diagnostics),
-                                            callback_group=self._diag_group)
+                                            callback_group=self._diag_group, clock=self._diagnostics_clock())
         self.startup_s = time.monotonic() - _T_START
         self._diagnostics()                      # a first /diagnostics right away: "ready"
         self.get_logger().info(
@@ -189,17 +197,18 @@ class TwinNode(Node):
         def cb(data: bytes, info: dict) -> None:
             recv = self.get_clock().now().nanoseconds
             log = self.log
+            seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+            seq = seq if isinstance(seq, int) and 0 < seq < 2**63 else None     # per publisher; None: unknown
             if log is not None:
                 src = info.get("source_timestamp") if isinstance(info, dict) else None
-                seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
                 log.write_raw(self.subs[kind].topic_name, data, recv, src or recv,
-                              sequence=seq if isinstance(seq, int) and 0 <= seq < 2**32 else None)
+                              sequence=seq if seq is not None and seq < 2**32 else None)
             try:
                 msg = decode(msgtype, data)
             except InputError as exc:
                 self.core.reject(kind, str(exc), recv)
                 return
-            self.core.add_message(kind, msg, recv)
+            self.core.add_message(kind, msg, recv, sequence=seq)
 
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
             try:
@@ -223,11 +232,21 @@ class TwinNode(Node):
         for level, text in self.core.pop_events():
             (logger.error if level >= 2 else logger.warning)(text)
 
+    def _diagnostics_clock(self):
+        """Wall (steady) clock for /diagnostics under use_sim_time, so a stopped /clock is reported."""
+        if not self.prm["use_sim_time"]:
+            return None
+        from rclpy.clock import Clock, ClockType
+        return Clock(clock_type=ClockType.STEADY_TIME)
+
     def _diagnostics(self) -> None:
         if self.stopping:
             return
         now = self.get_clock().now().nanoseconds
-        extra = [self._node_status()]
+        clock = self.clock_watch.update(now, time.monotonic())
+        if clock.status == "waiting":
+            return                               # no valid time to stamp it with yet (sim time before /clock)
+        extra = [self._node_status(clock)]
         with self._core_lock:
             diag = self.core.diagnostics(now, extra)
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
@@ -235,12 +254,20 @@ class TwinNode(Node):
         if self.log is not None:
             self.log.write_raw(self.fq[DIAGNOSTICS_TOPIC], data, now, now)
 
-    def _node_status(self) -> dict:
+    def _node_status(self, clock=None) -> dict:
         values = {"startup_s": round(self.startup_s, 3), "callback_errors": self.callback_errors,
                   "last_callback_error": self.last_callback_error,
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
+        many = self._input_publishers(values)
+        if many:
+            level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
+        if clock is not None:
+            values.update({"clock_status": clock.status, "clock_unchanged_s": round(clock.unchanged_s, 3),
+                           "clock_stalls": self.clock_watch.stalls})
+            if clock.status == "stalled":
+                level, msg = m.DIAG_WARN, clock.describe()
         if self.log is not None:
             st = self.log.stats()
             values.update({"log_path": str(self.log.log.path), "log_written": st.written,
@@ -251,6 +278,21 @@ class TwinNode(Node):
         else:
             values["log_path"] = "off"
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
+
+    def _input_publishers(self, values: dict) -> list[str]:
+        """Publishers of each input topic from the ROS graph into ``values``; topics with more than one."""
+        many = []
+        for kind, sub in self.subs.items():
+            try:
+                infos = self.get_publishers_info_by_topic(sub.topic_name)
+            except Exception:  # noqa: BLE001 - graph query during shutdown
+                continue
+            names = [f"{i.node_namespace.rstrip('/')}/{i.node_name} (gid {bytes(i.endpoint_gid)[:8].hex()})"
+                     for i in infos]
+            values[f"publishers.{kind}"] = clip(f"{len(names)}: {', '.join(names)}", 300)
+            if len(names) > 1:
+                many.append(clip(f"{sub.topic_name} ({', '.join(names)})", 200))
+        return many
 
     # -------------------------------------------------------------- shutdown
     def close_log(self) -> None:

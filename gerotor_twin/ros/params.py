@@ -50,6 +50,8 @@ PARAMETERS: tuple[Param, ...] = (
     Param("publish_rate_hz", 50.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
+    Param("clock_stall_s", 1.0, "the node clock unchanged this long in wall time is reported as stalled on "
+                                "/diagnostics (use_sim_time: /clock stopped) [s]", 0.01, 3600.0),
     Param("shaft_speed_topic", "bench/shaft_speed", "sensor_msgs/JointState input, velocity[0] [rad/s]"),
     Param("delivery_pressure_topic", "bench/delivery_pressure", "sensor_msgs/FluidPressure input, absolute [Pa]"),
     Param("suction_pressure_topic", "bench/suction_pressure",

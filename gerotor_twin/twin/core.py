@@ -53,6 +53,9 @@ rate-limited in :meth:`TwinCore.pop_events`)
       ``stamp_rebase_samples`` consecutive consistent samples rejected for
       their stamp, the order re-anchors on them, so one bad stamp never blocks
       the stream (:mod:`gerotor_twin.twin.stamps`).
+    * More than one publisher on an input topic: the first source is
+      followed, the others' samples counted (and logged by the node) but not
+      used; WARN on diagnostics (:mod:`gerotor_twin.twin.sources`).
     * A header stamp of 0 (source does not stamp) is counted per input
       (``zero_stamps``), reported (WARN on diagnostics in a period where it
       happened) and the sample taken as unstamped.
@@ -91,6 +94,7 @@ from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
 from gerotor_twin.twin.settings import NS, TwinSettings
+from gerotor_twin.twin.sources import SourceTracker
 from gerotor_twin.twin.stamps import REBASE, RESTART, StampGuard
 
 __all__ = ["TwinCore", "TickResult"]
@@ -141,6 +145,7 @@ class TwinCore:
         self._S = s.sample_ns
         self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s, self._stamp_guard())
                           for k, spec in INPUTS.items()}
+        self._sources = {k: SourceTracker(switch_after_ns=int(s.stale_timeout_s * NS / 2)) for k in INPUTS}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
@@ -167,14 +172,21 @@ class TwinCore:
         self._last_tick: TickResult | None = None
 
     # ------------------------------------------------------------------ inputs
-    def add_message(self, kind: str, msg: Any, receive_ns: int) -> bool:
+    def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None) -> bool:
         """Add a decoded input message (see :func:`~gerotor_twin.twin.inputs.sample_from_message`).
+
+        ``sequence`` is the publisher's publication sequence number (message
+        info of the subscription, or the MCAP message sequence; None / 0 =
+        unknown): with more than one publisher on the topic, only the followed
+        source is used (:mod:`gerotor_twin.twin.sources`).
 
         Returns
         -------
         bool
-            True if accepted; False if rejected (counted and reported).
+            True if accepted; False if rejected (counted and reported) or from another source.
         """
+        if sequence is not None and not self._from_followed_source(kind, sequence, int(receive_ns)):
+            return False
         try:
             value, stamp = sample_from_message(kind, msg)
         except InputError as exc:
@@ -233,6 +245,21 @@ class TwinCore:
                 self._report(kind, "stamp_" + verdict, 1, self._stamp_note(kind, verdict), receive_ns)
             ch.add(value, stamp_ns, receive_ns, verdict)
         return True
+
+    def _from_followed_source(self, kind: str, sequence: int, receive_ns: int) -> bool:
+        if kind not in INPUTS:
+            raise InputError("input", kind, " | ".join(INPUTS))
+        with self._lock:
+            tr = self._sources[kind]
+            switches = tr.switches
+            use = tr.observe(sequence, receive_ns)
+            if tr.switches != switches:
+                self._report(kind, "source_switch", 1, f"{kind}: the followed source went silent; now following "
+                             f"source #{tr.followed}", receive_ns)
+            if not use:
+                self._report(kind, "other_source", 1, f"{kind}: more than one publisher on the topic; following "
+                             f"source #{tr.followed}, samples of the others are logged but not used", receive_ns)
+        return use
 
     # ---------------------------------------------------------- stamp checks
     def _stamp_guard(self) -> StampGuard:
@@ -354,6 +381,8 @@ class TwinCore:
                 for ch in self._channels.values():
                     ch.drop_after(now_ns)
                     ch.last_stamp = None
+                for tr in self._sources.values():
+                    tr.reset()
             self._t_ns = None
         self._last_now = now_ns
         target = (now_ns // S) * S
@@ -581,8 +610,15 @@ class TwinCore:
                           "age_s": None if last is None else (now_ns - last[1]) / NS,
                           "accepted": ch.accepted, "clamped": ch.clamped, "rejected": dict(ch.rejected),
                           "stamp_restarts": ch.stamp_restarts, "stamp_rebases": ch.stamp_rebases,
-                          "zero_stamps": ch.zero_stamps, "last_error": ch.last_error}
+                          "zero_stamps": ch.zero_stamps, "last_error": ch.last_error,
+                          **self._source_report(k, now_ns)}
         return out
+
+    def _source_report(self, kind: str, now_ns: int) -> dict[str, Any]:
+        tr = self._sources[kind]
+        return {"sources_active": tr.active(now_ns), "sources_seen": tr.sources_seen,
+                "followed_source": tr.followed, "other_source_samples": tr.other_samples,
+                "source_switches": tr.switches}
 
     def snapshot(self, now_ns: int) -> dict[str, Any]:
         """Plain figures of the twin (what :meth:`diagnostics` reports)."""

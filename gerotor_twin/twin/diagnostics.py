@@ -86,6 +86,8 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
         values[f"{kind}.stamp_restarts"] = info["stamp_restarts"]
         values[f"{kind}.stamp_rebases"] = info.get("stamp_rebases", 0)
         values[f"{kind}.zero_stamps"] = info.get("zero_stamps", 0)
+        for key in ("sources_active", "sources_seen", "followed_source", "other_source_samples", "source_switches"):
+            values[f"{kind}.{key}"] = _fmt(info.get(key))
         values[f"{kind}.last_error"] = info["last_error"]
         if kind in REQUIRED and (age is None or age > stale_timeout_s):
             level = max(level, m.DIAG_STALE if age is None else m.DIAG_WARN)
@@ -99,6 +101,12 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
     if zero:
         level = max(level, m.DIAG_WARN)
     bad += zero
+    many = [f"{k}: {i['sources_active']} sources publishing (following source #{i['followed_source']}; "
+            f"{i['other_source_samples']} samples of the others logged, not used)"
+            for k, i in snap["inputs"].items() if (i.get("sources_active") or 0) > 1]
+    if many:
+        level = max(level, m.DIAG_WARN)
+    bad += many
     msg = "; ".join(problems + bad) or "ok"
     return m.diagnostic_status(min(level, m.DIAG_STALE), INPUT_STATUS_NAME, msg, hardware_id="gerotor_twin",
                                values=values)
