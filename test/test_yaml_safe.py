@@ -110,3 +110,27 @@ def test_every_command_config_problem_is_one_line(tmp_path, args, bad):
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: --config") and "Traceback" not in p.stderr, p.stderr
     assert len(lines[0]) < MAX_ERROR_CHARS
+
+
+def test_one_loader_everywhere():
+    """Every YAML the package reads goes through gerotor_twin.yaml_safe (no other yaml.load/safe_load/compose)."""
+    import re
+    bad = []
+    for f in (ROOT / "gerotor_twin").rglob("*.py"):
+        if f.name == "yaml_safe.py":
+            continue
+        for n, line in enumerate(f.read_text().splitlines(), 1):
+            if re.search(r"\byaml\.(safe_load|load|full_load|unsafe_load|load_all|safe_load_all|compose)\b", line) or \
+                    re.search(r"\b(SafeLoader|FullLoader|CSafeLoader|CLoader)\b", line):
+                bad.append(f"{f.relative_to(ROOT)}:{n}")
+    assert not bad, bad
+
+
+def test_pump_config_in_mcap_metadata_goes_through_the_loader(tmp_path):
+    """A report over a twin log whose stored pump config is an alias bomb falls back, it does not blow up."""
+    from gerotor_twin.report.data import TwinData, pump_config
+    twin = TwinData.__new__(TwinData)
+    twin.pump_config_yaml = laughs()
+    twin.path = "x.mcap"
+    cfg = pump_config(twin)                    # falls back to the default pump (noted by the caller)
+    assert cfg.gears.chambers == 7

@@ -178,7 +178,7 @@ class TwinNode(Node):
 
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
-        self.last_callback_error = f"{type(exc).__name__}: {exc}"
+        self.last_callback_error = clip(f"{type(exc).__name__}: {exc}", 300)
         if self.callback_errors in (1, 10, 100, 1000) or self.callback_errors % 10000 == 0:
             self.get_logger().error(f"callback error #{self.callback_errors}: {self.last_callback_error}\n"
                                     + traceback.format_exc(limit=5))
