@@ -3,9 +3,9 @@ are reported on /diagnostics (the second source followed-not, but logged), a sto
 
 Tier: behaviour (real peers).  Domain ids from claim_domain(); every node process is stopped by PID.
 """
+import contextlib
 import math
 import signal
-import threading
 import time
 
 import pytest
@@ -14,6 +14,7 @@ rclpy = pytest.importorskip("rclpy")
 
 from gerotor_twin.ros.domain import claim_domain  # noqa: E402
 from ros_peer import MS, Peer, kill_node, latest_diag, start_node, stop_node  # noqa: E402
+from test_ros_node import Bench  # noqa: E402  - /clock + good inputs at 200 Hz, stamps = bench.now()
 
 pytestmark = pytest.mark.slow
 
@@ -23,72 +24,49 @@ INPUTS = "gerotor_twin: inputs"
 NODE = "gerotor_twin: node"
 
 
-class Feeder:
-    """Good inputs at 200 Hz from one peer (wall-clock stamps), optionally /clock (sim time = wall + offset)."""
-
-    def __init__(self, peer, clock=False):
-        self.peer, self.clock = peer, clock
-        self.offset = 100 * 1_000_000_000 - time.time_ns() if clock else 0
-        self.on = threading.Event()
-        self.on.set()
-        self.lock = threading.Lock()
-        self.running = True
-        self.thread = threading.Thread(target=self.run, daemon=True)
-        self.thread.start()
-
-    def now(self):
-        return time.time_ns() + self.offset
-
-    def run(self):
-        while self.running:
-            if self.on.is_set():
-                with self.lock:
-                    t = self.now()
-                    if self.clock:
-                        self.peer.send_clock(t)
-                    self.peer.send("shaft_speed", W, t)
-                    self.peer.send("delivery_pressure", PD, t)
-            time.sleep(0.005)
-
-    def stop(self):
-        self.running = False
-        self.thread.join(2)
-
-
 def counter(peer, key, name=INPUTS):
     return int(latest_diag(peer, name).get(key, 0))
 
 
-@pytest.fixture(scope="module")
-def wall_node(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("inputs")
+@contextlib.contextmanager
+def node_and_bench(tmp, *params):
+    """twin_node (params) + a peer + Bench feeding it; yields (proc, peer, bench, domain); stops all by PID."""
     d = claim_domain()
-    proc = start_node(d, tmp)
-    peer = Peer(d)
-    feeder = None
+    proc = start_node(d, tmp, *params)
+    peer = Peer(d, clock=True)
+    bench = None
     try:
         peer.wait_matched(proc=proc)
-        feeder = Feeder(peer)
+        bench = Bench(peer)
         peer.wait_for(lambda: latest_diag(peer, "gerotor_twin: model").get("status") == "running", 30,
                       "the model running", proc)
-        yield proc, peer, feeder, d, tmp
-        feeder.stop()
-        feeder = None
-        assert stop_node(proc, signal.SIGINT) == 0
+        yield proc, peer, bench, d
+        bench.stop()
+        bench = None
+        if proc.poll() is None:
+            assert stop_node(proc, signal.SIGINT) == 0
     finally:
-        if feeder is not None:
-            feeder.stop()
+        if bench is not None:
+            bench.stop()
         kill_node(proc)
         peer.close()
 
 
+@pytest.fixture(scope="module")
+def wall_node(tmp_path_factory):
+    """Wall clock (no use_sim_time): the bench's stamps are 55 years behind, a constant offset (allowed)."""
+    tmp = tmp_path_factory.mktemp("inputs")
+    with node_and_bench(tmp) as (proc, peer, bench, d):
+        yield proc, peer, bench, d, tmp
+
+
 def test_one_future_stamp_rejected_alone_stream_continues(wall_node):
     """The issue's case: one speed sample stamped 0.9 s ahead; before the fix the next 0.9 s were rejected."""
-    proc, peer, feeder, _, _ = wall_node
+    proc, peer, bench, _, _ = wall_node
     before = {k: counter(peer, f"shaft_speed.rejected.{k}") for k in ("future_stamp", "out_of_order_stamp")}
     acc = counter(peer, "shaft_speed.accepted")
-    with feeder.lock:
-        peer.send("shaft_speed", W, time.time_ns() + 900 * MS)
+    with bench.lock:
+        peer.send("shaft_speed", W, bench.now() + 900 * MS)
     peer.wait_for(lambda: counter(peer, "shaft_speed.rejected.future_stamp") > before["future_stamp"], 10,
                   "future_stamp on /diagnostics", proc)
     peer.wait_for(lambda: counter(peer, "shaft_speed.accepted") > acc + 300, 10, "good samples accepted", proc)
@@ -98,9 +76,9 @@ def test_one_future_stamp_rejected_alone_stream_continues(wall_node):
 
 
 def test_zero_stamp_counted_and_said(wall_node):
-    proc, peer, feeder, _, _ = wall_node
+    proc, peer, bench, _, _ = wall_node
     before = counter(peer, "delivery_pressure.zero_stamps")
-    with feeder.lock:
+    with bench.lock:
         peer.send("delivery_pressure", PD, 0)
     peer.wait_for(lambda: counter(peer, "delivery_pressure.zero_stamps") > before, 10, "zero stamp counted", proc)
     peer.wait_for(lambda: any("delivery_pressure: 1 header stamps = 0" in st.message
@@ -111,7 +89,7 @@ def test_zero_stamp_counted_and_said(wall_node):
 def test_second_publisher_warned_followed_not_and_logged(wall_node):
     """Two publishers on bench/shaft_speed (B at half the speed, stamps 2 ms older): WARN, A followed, no
     stamp rejections, and every B sample is in the log."""
-    proc, peer, feeder, d, tmp = wall_node
+    proc, peer, bench, d, tmp = wall_node
     rej0 = counter(peer, "shaft_speed.rejected.out_of_order_stamp")
     b = Peer(d)
     b_sent = []
@@ -122,7 +100,7 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
         def send_b(seconds):
             t_end = time.monotonic() + seconds
             while time.monotonic() < t_end:
-                t = time.time_ns() - 2 * MS
+                t = bench.now() - 2 * MS
                 b.send("shaft_speed", 0.5 * W, t)
                 b_sent.append(t)
                 time.sleep(0.005)
@@ -158,28 +136,13 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
 
 def test_clock_stall_reported_on_wall_timer(tmp_path):
     """use_sim_time: /clock stops -> /diagnostics keeps coming (wall timer) and says the clock is stalled."""
-    d = claim_domain()
-    proc = start_node(d, tmp_path, "use_sim_time:=true", "clock_stall_s:=0.5")
-    peer = Peer(d, clock=True)
-    feeder = None
-    try:
-        peer.wait_matched(proc=proc)
-        feeder = Feeder(peer, clock=True)
+    with node_and_bench(tmp_path, "use_sim_time:=true", "clock_stall_s:=0.5") as (proc, peer, bench, _):
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 30, "clock ok", proc)
-        feeder.on.clear()                                   # /clock and inputs stop
-        peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "stalled", 10,
-                      "clock stalled on /diagnostics", proc)
-        n = len(peer.get("/diagnostics"))
-        peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "/diagnostics while stalled", proc)
-        node = latest_diag(peer, NODE)
+        with bench.lock:                                    # the bench thread blocks: /clock and inputs stop
+            peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "stalled", 10,
+                          "clock stalled on /diagnostics", proc)
+            n = len(peer.get("/diagnostics"))
+            peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "/diagnostics while stalled", proc)
+            node = latest_diag(peer, NODE)
         assert node["_level"] == 1 and "clock stalled" in node["_message"] and int(node["clock_stalls"]) == 1
-        feeder.on.set()
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 10, "clock ok again", proc)
-        feeder.stop()
-        feeder = None
-        assert stop_node(proc, signal.SIGINT) == 0
-    finally:
-        if feeder is not None:
-            feeder.stop()
-        kill_node(proc)
-        peer.close()
