@@ -169,3 +169,18 @@ def test_node_refuses_live_changes_with_reason(tmp_path):
         ex.shutdown(timeout_sec=1.0)
         node.destroy_node()
         rclpy.try_shutdown(context=ctx)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("content,needle", [
+    ("/**:\n  ros__parameters:\n    stale_timout_s: 0.5\n", "did you mean stale_timeout_s"),
+    ("/**:\n  ros__parameters:\n    tick_rate_hz: [100\n", "valid YAML"),
+    ("/**:\n  ros__parameters:\n    bearing_model: fdm\n    log_queue: 1.5\n", "log_queue = 1.5"),
+])
+def test_node_refuses_bad_params_file_one_line(tmp_path, content, needle):
+    """Behaviour (real process): a typo or a malformed params file: exit 2, one line, no traceback."""
+    f = tmp_path / "twin.yaml"
+    f.write_text(content)
+    code, out = run_node("--params-file", str(f))
+    lines = [ln for ln in out.splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and needle in lines[0] and str(f) in lines[0], out
