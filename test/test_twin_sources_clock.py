@@ -92,3 +92,28 @@ def test_clock_watch():
     assert cw.update(6, 3.1).status == "ok"
     cw.update(6, 4.2)
     assert cw.stalls == 2
+
+
+def test_node_stall_then_burst_does_not_split_a_source():
+    """Seen in the full suite under load: the node is late a few times (no loss: its idea of the spacing grows),
+    then stalls 1 s and takes a burst (history depth 100 of 200 published: a sequence gap of 100).  Measured on
+    receive times the gap looked unexplained and the source was split in two; spacing is now measured on the
+    publisher's time (DDS source timestamp)."""
+    def run(with_source_time):
+        tr = SourceTracker(switch_after_ns=250 * MS)
+        seq, src_ns, recv = 1, 0, 0
+        used = []
+
+        def take(n, recv_step):
+            nonlocal seq, src_ns, recv
+            for _ in range(n):
+                used.append(tr.observe(seq, recv, src_ns if with_source_time else None))
+                seq, src_ns, recv = seq + 1, src_ns + 5 * MS, recv + recv_step
+        for _ in range(3):
+            take(50, 5 * MS)                              # normal: 200 Hz
+            take(3, 400 * MS)                             # the node late three times, nothing lost
+            seq, src_ns, recv = seq + 100, src_ns + 100 * 5 * MS, recv + 1000 * MS   # 1 s stall: 100 lost
+            take(100, 10_000)                             # the burst, 10 µs apart
+        return all(used), tr.sources_seen
+    assert run(with_source_time=False) != (True, 1)       # the failure, reproduced on receive times
+    assert run(with_source_time=True) == (True, 1)

@@ -8,9 +8,10 @@ callback a message-info dict with only ``source_timestamp``,
 number is counted per publisher (DDS writer), from 1, so the samples of each
 publisher form one increasing sequence.  :class:`SourceTracker` attributes a
 sample to the sequence it continues (the one whose last number is just
-below, a gap of lost samples allowed as far as the time since its last
-sample and its usual spacing explain it (twice that, at least 16, at most
-``max_gap``); on a tie the source that delivered least recently, which
+below, a gap of lost samples allowed as far as the publisher time since its
+last sample and its usual spacing explain it (twice that, at least 16, at
+most ``max_gap``; publisher time = the DDS source timestamp, so a stall of
+the node followed by a burst does not split a source); on a tie the source that delivered least recently, which
 follows strict alternation), or starts a new source.  The node also reads the topic's publishers from the ROS graph
 (names, GIDs) for the diagnostics.  A sample without a sequence number (an
 rmw that does not provide it, or a recording without it: MCAP sequence 0)
@@ -42,12 +43,13 @@ class _Source:
     ident: int                  #: 1, 2, ... in order of first appearance
     last_seq: int
     last_receive: int
+    last_source: int            #: source (publisher) time of its last sample [ns]
     samples: int = 0
-    interval_ns: float = 0.0    #: running mean of the receive spacing (0 until known)
+    interval_ns: float = 0.0    #: running mean of the publication spacing [ns] (0 until known)
 
-    def max_step(self, receive_ns: int, cap: int) -> int:
-        """Largest sequence step still taken as this source: lost samples as the elapsed time allows."""
-        dt = max(0, receive_ns - self.last_receive)
+    def max_step(self, source_ns: int, cap: int) -> int:
+        """Largest sequence step still taken as this source: lost samples as its elapsed time allows."""
+        dt = max(0, source_ns - self.last_source)
         expect = 2.0 * dt / self.interval_ns if self.interval_ns > 0 else 0.0
         return int(min(cap, _MIN_GAP + expect))
 
@@ -73,11 +75,17 @@ class SourceTracker:
         self.switches = 0                       #: times the followed source changed
         self.sources_seen = 0                   #: distinct sources since start
 
-    def observe(self, sequence: int | None, receive_ns: int) -> bool:
-        """Attribute one sample; True if it comes from the followed source (use it), False otherwise."""
+    def observe(self, sequence: int | None, receive_ns: int, source_ns: int | None = None) -> bool:
+        """Attribute one sample; True if it comes from the followed source (use it), False otherwise.
+
+        ``source_ns`` is the publisher's time of the sample (DDS source timestamp,
+        MCAP publish time): the spacing of a source is measured on it, so the
+        node's own scheduling (a stall, then a burst) does not split a source in
+        two.  Default: the receive time.
+        """
         if sequence is None or sequence <= 0:
             return True
-        src = self._attribute(int(sequence), int(receive_ns))
+        src = self._attribute(int(sequence), int(receive_ns), int(receive_ns if source_ns is None else source_ns))
         fol = self._find(self.followed)
         if fol is None or (fol is not src and receive_ns - fol.last_receive > self.switch_after_ns):
             if self.followed is not None:
@@ -91,28 +99,28 @@ class SourceTracker:
     def _find(self, ident: int | None) -> _Source | None:
         return next((s for s in self._sources if s.ident == ident), None)
 
-    def _attribute(self, seq: int, receive_ns: int) -> _Source:
+    def _attribute(self, seq: int, receive_ns: int, source_ns: int) -> _Source:
         self._sources = [s for s in self._sources if receive_ns - s.last_receive <= _FORGET_NS
                          or s.ident == self.followed]
         best = None
         for s in self._sources:
-            if s.last_seq < seq <= s.last_seq + s.max_step(receive_ns, self.max_gap):
+            if s.last_seq < seq <= s.last_seq + s.max_step(source_ns, self.max_gap):
                 key = (seq - s.last_seq, s.last_receive)
                 if best is None or key < best[0]:
                     best = (key, s)
         if best is None:
             if len(self._sources) >= _MAX_SOURCES:
                 self._sources.remove(min(self._sources, key=lambda s: s.last_receive))
-            src = _Source(self._next_id, seq, receive_ns)
+            src = _Source(self._next_id, seq, receive_ns, source_ns)
             self._next_id += 1
             self.sources_seen += 1
             self._sources.append(src)
         else:
             src = best[1]
         if src.samples:
-            dt = max(0, receive_ns - src.last_receive) / max(1, seq - src.last_seq)
+            dt = max(0, source_ns - src.last_source) / max(1, seq - src.last_seq)
             src.interval_ns = dt if src.interval_ns == 0 else 0.9 * src.interval_ns + 0.1 * dt
-        src.last_seq, src.last_receive = seq, receive_ns
+        src.last_seq, src.last_receive, src.last_source = seq, receive_ns, source_ns
         src.samples += 1
         return src
 
