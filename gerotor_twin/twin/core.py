@@ -233,7 +233,8 @@ class TwinCore:
         with self._lock:
             ch = self._channels[kind]
             if stamp_ns == 0:
-                stamp_ns = self._zero_stamp(ch, receive_ns)
+                self._zero_stamp(ch, receive_ns)
+                stamp_ns = None
             verdict = ch.check_stamp(stamp_ns, receive_ns)
             if verdict not in (None, RESTART, REBASE):
                 self._reject(ch, verdict, self._stamp_error(ch, verdict, stamp_ns, receive_ns), receive_ns)
@@ -269,12 +270,11 @@ class TwinCore:
         return StampGuard(restart_ns=int(round(s.stamp_restart_s * NS)), ahead_ns=int(round(s.stamp_ahead_s * NS)),
                           rebase_after=s.stamp_rebase_samples)
 
-    def _zero_stamp(self, ch: InputChannel, receive_ns: int) -> None:  # returns the stamp to use: None
+    def _zero_stamp(self, ch: InputChannel, receive_ns: int) -> None:
         """A header stamp of 0: counted, reported, the sample taken as unstamped (no order check)."""
         ch.zero_stamps += 1
         self._report(ch.spec.kind, "zero_stamp", 1, f"{ch.spec.kind}: header stamp 0 (the source does not stamp "
                      "its messages): taken as unstamped, its order cannot be checked", receive_ns)
-        return None
 
     def _stamp_error(self, ch: InputChannel, reason: str, stamp_ns: int, receive_ns: int) -> str:
         kind = ch.spec.kind
