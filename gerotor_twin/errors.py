@@ -41,7 +41,7 @@ def short_repr(value: Any, limit: int = _PART_CHARS) -> str:
     return clip(text, limit)
 
 
-def one_line(exc: BaseException, limit: int = MAX_ERROR_CHARS) -> str:
+def one_line(exc: BaseException | str, limit: int = MAX_ERROR_CHARS) -> str:
     """The message of ``exc`` as one bounded line (for ``error: ...`` and /diagnostics)."""
     return clip(str(exc), limit)
 

@@ -43,8 +43,8 @@ _Loader.add_implicit_resolver(
     list("-+0123456789"))
 
 
-def _expanded_size(root: yaml.Node, limit: int, what: str) -> int:
-    """Nodes in the document with aliases expanded; refuses recursion and sizes over ``limit``."""
+def _expanded_size(root: yaml.Node, limit: int, what: str, aliases: bool = True) -> int:
+    """Nodes in the document with aliases expanded; refuses recursion, sizes over ``limit``, aliases if asked."""
     size: dict[int, int] = {}
     active: set[int] = set()
     stack: list[tuple[yaml.Node, bool]] = [(root, False)]
@@ -66,6 +66,9 @@ def _expanded_size(root: yaml.Node, limit: int, what: str) -> int:
             size[key] = total
             continue
         if key in size:
+            if not aliases:
+                raise InputError(what, "a YAML alias (*name)", "plain values (no anchors/aliases)",
+                                 "rcl refuses aliases in parameter files")
             continue
         if key in active:
             raise InputError(what, "a recursive YAML alias", "a finite document (no alias inside its own anchor)")
@@ -79,7 +82,7 @@ def _expanded_size(root: yaml.Node, limit: int, what: str) -> int:
 
 
 def load_yaml(text: str | bytes, what: str = "YAML", *, max_bytes: int = MAX_YAML_BYTES,
-              max_nodes: int = MAX_YAML_NODES) -> Any:
+              max_nodes: int = MAX_YAML_NODES, aliases: bool = True) -> Any:
     """Parse one YAML document safely.
 
     Parameters
@@ -90,6 +93,8 @@ def load_yaml(text: str | bytes, what: str = "YAML", *, max_bytes: int = MAX_YAM
         Name of the source for error messages (a file path, ``--params-file`` ...).
     max_bytes, max_nodes : int
         Size limits: text length [bytes] and expanded document size [nodes].
+    aliases : bool
+        False: refuse any alias (what rcl does with parameter files).
 
     Returns
     -------
@@ -117,7 +122,7 @@ def load_yaml(text: str | bytes, what: str = "YAML", *, max_bytes: int = MAX_YAM
         node = loader.get_single_node()
         if node is None:
             return None
-        _expanded_size(node, max_nodes, what)
+        _expanded_size(node, max_nodes, what, aliases)
         return loader.construct_document(node)
     except yaml.YAMLError as exc:
         first = (str(exc).strip().splitlines() or ["invalid YAML"])[0]
@@ -132,7 +137,7 @@ def load_yaml(text: str | bytes, what: str = "YAML", *, max_bytes: int = MAX_YAM
 
 
 def load_yaml_file(path: str | Path, what: str | None = None, *, max_bytes: int = MAX_YAML_BYTES,
-                   max_nodes: int = MAX_YAML_NODES) -> Any:
+                   max_nodes: int = MAX_YAML_NODES, aliases: bool = True) -> Any:
     """Read and parse a YAML file; every problem is one :class:`InputError` line.
 
     ``what`` names the option the path came from (``--config``, ``--params-file``);
@@ -153,4 +158,4 @@ def load_yaml_file(path: str | Path, what: str | None = None, *, max_bytes: int 
     if len(data) > max_bytes:
         raise InputError(what, str(p), f"a YAML file of at most {max_bytes} bytes", "file too large")
     return load_yaml(data, f"{what} {p}" if what != str(p) else what, max_bytes=max_bytes,
-                     max_nodes=max_nodes)
+                     max_nodes=max_nodes, aliases=aliases)

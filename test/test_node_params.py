@@ -68,7 +68,8 @@ def test_params_file_sections_and_typos(tmp_path):
 
 @pytest.mark.parametrize("content,needle", [
     (None, "file not found"), ("/**:\n  ros__parameters: [1, 2\n", "valid YAML"),
-    ("- a\n- b\n", "a mapping of node names"), ("/**:\n  ros__parameters: 3\n", "a mapping of parameter values"),
+    ("- a\n- b\n", "a mapping of node names"),
+    ("/**:\n  ros__parameters:\n    stale_timeout_s: &t 0.5\n    stamp_restart_s: *t\n", "rcl refuses aliases"), ("/**:\n  ros__parameters: 3\n", "a mapping of parameter values"),
     ("a0: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
         f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}" if i > 1 else "*a"] * 10) + "]\n" for i in range(1, 9)),
      "alias"),
@@ -184,3 +185,13 @@ def test_node_refuses_bad_params_file_one_line(tmp_path, content, needle):
     code, out = run_node("--params-file", str(f))
     lines = [ln for ln in out.splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and needle in lines[0] and str(f) in lines[0], out
+
+
+@pytest.mark.slow
+def test_command_line_rcl_refuses_is_one_error_line():
+    """Behaviour (real process): what only rcl checks (a malformed remap rule) ends in one `error:` line, exit 2
+    (rcl logs its own [ERROR] line before; no traceback)."""
+    code, out = run_node("-r", "foo")
+    lines = [ln for ln in out.splitlines() if ln.strip()]
+    assert code == 2 and lines[-1].startswith("error: ") and "remap" in lines[-1] and "Traceback" not in out, out
+    assert len(lines) <= 2

@@ -324,7 +324,11 @@ def main(argv=None) -> int:
     param_values = _validated_parameters(args)
     if param_values is None:
         return 2
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except Exception as exc:  # noqa: BLE001 - rcl refused the command line (RCLError): one line, exit 2
+        print(f"error: {one_line(str(exc).split(', at /')[0])}", file=sys.stderr)
+        return 2
     stop = threading.Event()
     node = None
     executor = None

@@ -107,7 +107,7 @@ def params_from_file(path: str, node_fqn: str) -> dict[str, Any]:
     InputError
         Missing, unreadable or malformed file, or a section without ``ros__parameters``.
     """
-    doc = load_yaml_file(path, "--params-file")
+    doc = load_yaml_file(path, "--params-file", aliases=False)        # rcl refuses aliases too
     what = f"--params-file {path}"
     if not isinstance(doc, dict):
         raise InputError(what, type(doc).__name__, "a mapping of node names to {ros__parameters: {...}}")
@@ -147,6 +147,7 @@ def overrides_from_args(argv: list[str], node_name: str, namespace: str = "/") -
         target, _, pname = key.rpartition(":")
         if target and not _key_regex(target).match(fqn):
             continue
-        value = load_yaml(text, f"-p {pname}", max_bytes=100_000, max_nodes=10_000) if text.strip() else ""
+        value = load_yaml(text, f"-p {pname}", max_bytes=100_000, max_nodes=10_000,
+                          aliases=False) if text.strip() else ""
         out[pname] = Override(pname, value, "-p")
     return out
