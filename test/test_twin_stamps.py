@@ -146,3 +146,14 @@ def test_core_zero_stamps_counted_and_reported(model):
     assert values["shaft_speed.zero_stamps"] == "50" and values["delivery_pressure.zero_stamps"] == "0"
     st2 = core.diagnostics(1250 * MS)["status"][1]        # none in the next period: no longer WARN for it
     assert "stamps = 0" not in st2["message"]
+
+
+def test_lone_stale_sample_taken_as_restart_does_not_block():
+    """A single sample stamped 5 s in the past is taken as a source restart (accepted, counted);
+    the good stream that follows is newer than it and is accepted without a single rejection."""
+    g = StampGuard(restart_ns=1 * S, ahead_ns=500 * MS)
+    stream(g, 10_000, 100)
+    t = 10_500 * MS
+    assert g.check(t - 5 * S, t) == RESTART
+    g.accept(t - 5 * S, t, RESTART)
+    assert stream(g, 10_500, 200) == [None] * 200 and g.restarts == 1

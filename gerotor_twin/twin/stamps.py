@@ -6,7 +6,9 @@ stamp is acceptable.  The rules (all times of one input, in ns):
 * **Duplicate** (stamp equal to the last accepted one): rejected.
 * **Out of order** (older than the last accepted one by at most
   ``restart_ns``): rejected.  Older by more: a **restart** of the source,
-  accepted and counted.
+  accepted and counted; the stream's usual offset is then learnt again from
+  the next sample (so a lone stale sample does not make the good stream that
+  follows look ahead).
 * **Ahead** (``future_stamp``): the stamp minus its receive time exceeds the
   stream's usual offset by more than ``ahead_ns``: rejected by itself.  The
   usual offset is the largest ``stamp - receive`` of the accepted samples
@@ -105,10 +107,13 @@ class StampGuard:
 
     def accept(self, stamp_ns: int, receive_ns: int, verdict: str | None = None) -> None:
         """Record an accepted sample (with the verdict :meth:`check` gave it)."""
-        if verdict == RESTART:
-            self.restarts += 1
+        if verdict == RESTART:          # learn the new offset from the next sample, not from this one:
+            self.restarts += 1          # a lone stale sample must not make the good stream look "ahead"
             self.offset_ns = None
-        elif verdict == REBASE:
+            self._offset_at = None
+            self.last_stamp = stamp_ns
+            return
+        if verdict == REBASE:
             self.rebases += 1
             self.offset_ns = None
             self._run.clear()
