@@ -88,27 +88,20 @@ def test_zero_stamp_counted_and_said(wall_node):
 
 def test_second_publisher_warned_followed_not_and_logged(wall_node):
     """Two publishers on bench/shaft_speed (B at half the speed, stamps 2 ms older): WARN, A followed, no
-    stamp rejections, and every B sample is in the log."""
+    stamp rejections, and every B sample the node received is in the log (counted = logged)."""
     proc, peer, bench, d, tmp = wall_node
     rej0 = counter(peer, "shaft_speed.rejected.out_of_order_stamp")
+    seen0 = counter(peer, "shaft_speed.other_source_samples")
     b = Peer(d)
     b_sent = []
     try:
         b.wait_matched(kinds=("shaft_speed",), proc=proc)
-        seen0 = counter(peer, "shaft_speed.other_source_samples")
-
-        def send_b(seconds):
-            t_end = time.monotonic() + seconds
-            while time.monotonic() < t_end:
-                t = bench.now() - 2 * MS
-                b.send("shaft_speed", 0.5 * W, t)
-                b_sent.append(t)
-                time.sleep(0.005)
-        while counter(peer, "shaft_speed.other_source_samples") == seen0:   # discovery: until the node hears B
-            send_b(0.2)
-            assert proc.poll() is None and len(b_sent) < 4000, "the node never received the second publisher"
-        b_sent.clear()
-        send_b(3.0)
+        t_end = time.monotonic() + 4.0
+        while time.monotonic() < t_end:
+            t = bench.now() - 2 * MS
+            b.send("shaft_speed", 0.5 * W, t)
+            b_sent.append(t)
+            time.sleep(0.005)
         peer.wait_for(lambda: counter(peer, "shaft_speed.other_source_samples") > seen0 + 100, 10,
                       "other-source samples counted", proc)
         inp, node = latest_diag(peer, INPUTS), latest_diag(peer, NODE)
@@ -119,9 +112,11 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
     assert counter(peer, "shaft_speed.rejected.out_of_order_stamp") == rej0
     assert node["_level"] == 1 and "more than one publisher" in node["_message"] and "gid" in node["_message"]
     assert node["publishers.shaft_speed"].startswith("2: ")
-    time.sleep(1.0)
+    n = len(peer.get("/diagnostics"))                       # two more reports: every B sample processed
+    peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "/diagnostics", proc)
+    received = counter(peer, "shaft_speed.other_source_samples") - seen0
     from rosbags.highlevel import AnyReader
-    logged = set()
+    logged = []
     proc.send_signal(signal.SIGINT)            # finalise the log (the fixture's stop then sees the exit)
     proc.wait(30)
     with AnyReader(list(tmp.glob("*.mcap"))) as reader:
@@ -129,9 +124,10 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
             if conn.topic == "/bench/shaft_speed":
                 msg = reader.deserialize(raw, conn.msgtype)
                 if msg.velocity[0] == pytest.approx(0.5 * W):
-                    logged.add(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
-    missing = [t for t in b_sent if t not in logged]
-    assert not missing, f"{len(missing)} of {len(b_sent)} second-source samples not logged"
+                    logged.append(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
+    assert len(logged) == received, f"{received} second-source samples received, {len(logged)} logged"
+    assert set(logged) <= set(b_sent) and received >= 100
+    print(f"second source: {len(b_sent)} sent, {received} received and logged")
 
 
 def test_clock_stall_reported_on_wall_timer(tmp_path):

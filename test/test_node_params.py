@@ -69,7 +69,8 @@ def test_params_file_sections_and_typos(tmp_path):
 @pytest.mark.parametrize("content,needle", [
     (None, "file not found"), ("/**:\n  ros__parameters: [1, 2\n", "valid YAML"),
     ("- a\n- b\n", "a mapping of node names"),
-    ("/**:\n  ros__parameters:\n    stale_timeout_s: &t 0.5\n    stamp_restart_s: *t\n", "rcl refuses aliases"), ("/**:\n  ros__parameters: 3\n", "a mapping of parameter values"),
+    ("/**:\n  ros__parameters:\n    stale_timeout_s: &t 0.5\n    stamp_restart_s: *t\n", "rcl refuses aliases"),
+    ("/**:\n  ros__parameters: 3\n", "a mapping of parameter values"),
     ("a0: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
         f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}" if i > 1 else "*a"] * 10) + "]\n" for i in range(1, 9)),
      "alias"),

@@ -85,8 +85,8 @@ def run_cli(*args):
                           cwd=ROOT, timeout=300)
 
 
-@pytest.mark.parametrize("args", [("geometry",), ("simulate", "--rpm", "1000", "--bar", "5"), ("demo", "--out", "{tmp}/d"),
-                                  ("bench", "realtime"), ("synth-bench", "-o", "{tmp}/s.mcap"),
+@pytest.mark.parametrize("args", [("geometry",), ("simulate", "--rpm", "1000", "--bar", "5"),
+                                  ("demo", "--out", "{tmp}/d"), ("bench", "realtime"), ("synth-bench", "-o", "{tmp}/s.mcap"),
                                   ("run-bag", "bags/bench_map.mcap", "-o", "{tmp}/r.mcap"),
                                   ("paper", "efficiency")])
 @pytest.mark.parametrize("bad", ["dir", "bomb", "unreadable"])

@@ -160,8 +160,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
             while log_ns >= next_tick:
                 tick(next_tick)
                 next_tick += _TICK_NS
-            core.add_message(kinds[ch.topic], f.decode(ch, msg), log_ns, sequence=msg.sequence or None,
-                             source_ns=pub_ns)
+            core.add_message(kinds[ch.topic], f.decode(ch, msg), log_ns, sequence=msg.sequence or None)
             log.write_raw(ch.topic, msg.data, log_ns, pub_ns, sequence=msg.sequence)
             n_in += 1
             now_w = time.monotonic()

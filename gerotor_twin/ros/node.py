@@ -199,8 +199,8 @@ class TwinNode(Node):
             log = self.log
             seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
             seq = seq if isinstance(seq, int) and 0 < seq < 2**63 else None     # per publisher; None: unknown
-            src = info.get("source_timestamp") if isinstance(info, dict) else None
             if log is not None:
+                src = info.get("source_timestamp") if isinstance(info, dict) else None
                 log.write_raw(self.subs[kind].topic_name, data, recv, src or recv,
                               sequence=seq if seq is not None and seq < 2**32 else None)
             try:
@@ -208,7 +208,7 @@ class TwinNode(Node):
             except InputError as exc:
                 self.core.reject(kind, str(exc), recv)
                 return
-            self.core.add_message(kind, msg, recv, sequence=seq, source_ns=src if isinstance(src, int) else None)
+            self.core.add_message(kind, msg, recv, sequence=seq)
 
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
             try:

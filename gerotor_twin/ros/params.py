@@ -129,7 +129,8 @@ def check_value(name: str, value: Any, source: str = "") -> Any:
           "string": isinstance(value, str)}[kind]
     if not ok:
         quote = " (quote it to make it a string)" if kind == "string" else ""
-        raise InputError(field, value, f"{'an' if kind == 'integer' else 'a'} {kind}{quote}", f"got {_TYPE_WORDS.get(type(value), type(value).__name__)}")
+        got = _TYPE_WORDS.get(type(value), type(value).__name__)
+        raise InputError(field, value, f"{'an' if kind == 'integer' else 'a'} {kind}{quote}", f"got {got}")
     if kind == "double":
         value = float(value)
     if spec is not None and spec.lo is not None:

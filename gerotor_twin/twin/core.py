@@ -172,22 +172,20 @@ class TwinCore:
         self._last_tick: TickResult | None = None
 
     # ------------------------------------------------------------------ inputs
-    def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None,
-                    source_ns: int | None = None) -> bool:
+    def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None) -> bool:
         """Add a decoded input message (see :func:`~gerotor_twin.twin.inputs.sample_from_message`).
 
         ``sequence`` is the publisher's publication sequence number (message
         info of the subscription, or the MCAP message sequence; None / 0 =
-        unknown), ``source_ns`` the publisher's time of the message (DDS source
-        timestamp, MCAP publish time): with more than one publisher on the
-        topic, only the followed source is used (:mod:`gerotor_twin.twin.sources`).
+        unknown): with more than one publisher on the topic, only the followed
+        source is used (:mod:`gerotor_twin.twin.sources`).
 
         Returns
         -------
         bool
             True if accepted; False if rejected (counted and reported) or from another source.
         """
-        if sequence is not None and not self._from_followed_source(kind, sequence, int(receive_ns), source_ns):
+        if sequence is not None and not self._from_followed_source(kind, sequence, int(receive_ns)):
             return False
         try:
             value, stamp = sample_from_message(kind, msg)
@@ -249,13 +247,13 @@ class TwinCore:
             ch.add(value, stamp_ns, receive_ns, verdict)
         return True
 
-    def _from_followed_source(self, kind: str, sequence: int, receive_ns: int, source_ns: int | None) -> bool:
+    def _from_followed_source(self, kind: str, sequence: int, receive_ns: int) -> bool:
         if kind not in INPUTS:
             raise InputError("input", kind, " | ".join(INPUTS))
         with self._lock:
             tr = self._sources[kind]
             switches = tr.switches
-            use = tr.observe(sequence, receive_ns, source_ns)
+            use = tr.observe(sequence, receive_ns)
             if tr.switches != switches:
                 self._report(kind, "source_switch", 1, f"{kind}: the followed source went silent; now following "
                              f"source #{tr.followed}", receive_ns)

@@ -5,17 +5,27 @@ callback a message-info dict with only ``source_timestamp``,
 ``received_timestamp``, ``publication_sequence_number`` and
 ``reception_sequence_number`` (checked on this build; the publisher GID that
 ``rmw_message_info_t`` carries is not passed on).  The publication sequence
-number is counted per publisher (DDS writer), from 1, so the samples of each
-publisher form one increasing sequence.  :class:`SourceTracker` attributes a
-sample to the sequence it continues (the one whose last number is just
-below, a gap of lost samples allowed as far as the publisher time since its
-last sample and its usual spacing explain it (twice that, at least 16, at
-most ``max_gap``; publisher time = the DDS source timestamp, so a stall of
-the node followed by a burst does not split a source); on a tie the source that delivered least recently, which
-follows strict alternation), or starts a new source.  The node also reads the topic's publishers from the ROS graph
-(names, GIDs) for the diagnostics.  A sample without a sequence number (an
-rmw that does not provide it, or a recording without it: MCAP sequence 0)
-counts as the one source.
+number is counted per publisher (DDS writer), from 1, and a best-effort
+reader never delivers a writer's samples out of order, so the samples of each
+publisher form one increasing sequence, with gaps where samples were lost
+(a burst that overflows the subscription history loses thousands at once).
+
+:class:`SourceTracker` attributes a sample to the known source whose last
+number is the closest below it (any forward step: lost samples), on a tie to
+the source that delivered least recently (this follows strict alternation of
+two publishers started together).  A sample that continues no source (its
+number is not above any source's last one) comes from another publisher (or
+from a restarted one, which starts again at 1): a new source.  One ambiguity
+is repaired afterwards: when a second publisher whose numbers are *ahead*
+first appears, its sample looks like a jump of the first source; when the
+first source's next sample then falls between its number before that jump
+and the jump, the jump is split off as the new source.  (Its one sample was
+already used.)  Two publishers started together whose samples arrive in
+swapped order cannot always be told apart; they are still counted and WARNed.
+The node also reads the topic's publishers from the ROS graph (names, GIDs)
+for the diagnostics.  A sample without a sequence number (an rmw that does
+not provide it, or a recording without it: MCAP sequence 0) counts as the
+one source.
 
 Policy (documented in docs/node.md): the twin **follows the first source**.
 Samples of any other source are still logged (the node logs every received
@@ -35,7 +45,7 @@ __all__ = ["SourceTracker", "ACTIVE_WINDOW_NS"]
 ACTIVE_WINDOW_NS = 1_000_000_000      #: a source that delivered within this [ns] counts as active
 _FORGET_NS = 30_000_000_000           #: a source silent this long [ns] is forgotten
 _MAX_SOURCES = 64
-_MIN_GAP = 16                         #: sequence steps always taken as the same source (a few lost samples)
+_JUMP = 16                            #: a forward step above this is remembered as a jump (see above)
 
 
 @dataclass
@@ -43,15 +53,8 @@ class _Source:
     ident: int                  #: 1, 2, ... in order of first appearance
     last_seq: int
     last_receive: int
-    last_source: int            #: source (publisher) time of its last sample [ns]
     samples: int = 0
-    interval_ns: float = 0.0    #: running mean of the publication spacing [ns] (0 until known)
-
-    def max_step(self, source_ns: int, cap: int) -> int:
-        """Largest sequence step still taken as this source: lost samples as its elapsed time allows."""
-        dt = max(0, source_ns - self.last_source)
-        expect = 2.0 * dt / self.interval_ns if self.interval_ns > 0 else 0.0
-        return int(min(cap, _MIN_GAP + expect))
+    before_jump: int | None = None   #: last number before its latest jump (None: no jump since)
 
 
 class SourceTracker:
@@ -61,13 +64,10 @@ class SourceTracker:
     ----------
     switch_after_ns : int
         The followed source silent this long [ns]: the next delivering source is followed.
-    max_gap : int
-        Largest jump of a source's sequence number still taken as the same source (lost samples).
     """
 
-    def __init__(self, switch_after_ns: int, max_gap: int = 10_000):
+    def __init__(self, switch_after_ns: int):
         self.switch_after_ns = int(switch_after_ns)
-        self.max_gap = int(max_gap)
         self._sources: list[_Source] = []
         self._next_id = 1
         self.followed: int | None = None        #: ident of the followed source
@@ -75,17 +75,11 @@ class SourceTracker:
         self.switches = 0                       #: times the followed source changed
         self.sources_seen = 0                   #: distinct sources since start
 
-    def observe(self, sequence: int | None, receive_ns: int, source_ns: int | None = None) -> bool:
-        """Attribute one sample; True if it comes from the followed source (use it), False otherwise.
-
-        ``source_ns`` is the publisher's time of the sample (DDS source timestamp,
-        MCAP publish time): the spacing of a source is measured on it, so the
-        node's own scheduling (a stall, then a burst) does not split a source in
-        two.  Default: the receive time.
-        """
+    def observe(self, sequence: int | None, receive_ns: int) -> bool:
+        """Attribute one sample; True if it comes from the followed source (use it), False otherwise."""
         if sequence is None or sequence <= 0:
             return True
-        src = self._attribute(int(sequence), int(receive_ns), int(receive_ns if source_ns is None else source_ns))
+        src = self._attribute(int(sequence), int(receive_ns))
         fol = self._find(self.followed)
         if fol is None or (fol is not src and receive_ns - fol.last_receive > self.switch_after_ns):
             if self.followed is not None:
@@ -99,28 +93,32 @@ class SourceTracker:
     def _find(self, ident: int | None) -> _Source | None:
         return next((s for s in self._sources if s.ident == ident), None)
 
-    def _attribute(self, seq: int, receive_ns: int, source_ns: int) -> _Source:
+    def _new(self, seq: int, receive_ns: int) -> _Source:
+        if len(self._sources) >= _MAX_SOURCES:
+            self._sources.remove(min(self._sources, key=lambda s: s.last_receive))
+        src = _Source(self._next_id, seq, receive_ns)
+        self._next_id += 1
+        self.sources_seen += 1
+        self._sources.append(src)
+        return src
+
+    def _attribute(self, seq: int, receive_ns: int) -> _Source:
         self._sources = [s for s in self._sources if receive_ns - s.last_receive <= _FORGET_NS
                          or s.ident == self.followed]
-        best = None
-        for s in self._sources:
-            if s.last_seq < seq <= s.last_seq + s.max_step(source_ns, self.max_gap):
-                key = (seq - s.last_seq, s.last_receive)
-                if best is None or key < best[0]:
-                    best = (key, s)
-        if best is None:
-            if len(self._sources) >= _MAX_SOURCES:
-                self._sources.remove(min(self._sources, key=lambda s: s.last_receive))
-            src = _Source(self._next_id, seq, receive_ns, source_ns)
-            self._next_id += 1
-            self.sources_seen += 1
-            self._sources.append(src)
+        ahead = [s for s in self._sources if s.last_seq < seq]
+        if ahead:
+            src = min(ahead, key=lambda s: (seq - s.last_seq, s.last_receive))
+            src.before_jump = src.last_seq if seq - src.last_seq > _JUMP else src.before_jump
         else:
-            src = best[1]
-        if src.samples:
-            dt = max(0, source_ns - src.last_source) / max(1, seq - src.last_seq)
-            src.interval_ns = dt if src.interval_ns == 0 else 0.9 * src.interval_ns + 0.1 * dt
-        src.last_seq, src.last_receive, src.last_source = seq, receive_ns, source_ns
+            src = next((s for s in self._sources if s.before_jump is not None and s.before_jump < seq), None)
+            if src is not None:                  # its last jump was another publisher: split it off
+                intruder = self._new(src.last_seq, src.last_receive)
+                intruder.samples = 1
+                src.before_jump = None
+            else:
+                src = self._new(seq, receive_ns)
+                src.samples -= 1                 # counted below
+        src.last_seq, src.last_receive = seq, receive_ns
         src.samples += 1
         return src
 
