@@ -56,11 +56,28 @@ def test_followed_source_dies_switch_to_the_other():
 
 
 def test_publisher_restart_is_followed_after_the_switch_delay():
+    """The bench node restarts (new writer, numbers from 1) after 1 s: followed from its 5th sample."""
     tr = SourceTracker(switch_after_ns=250 * MS)
     for k in range(100):
         tr.observe(1000 + k, 10 * k * MS)
-    used = [tr.observe(1 + k, (2000 + 10 * k) * MS) for k in range(10)]      # restarted: seq from 1, 1 s later
-    assert all(used) and tr.switches == 1
+    used = [tr.observe(1 + k, (2000 + 10 * k) * MS) for k in range(10)]
+    assert used == [False] * 4 + [True] * 6 and tr.switches == 1
+
+
+def test_node_stall_does_not_switch_the_followed_source():
+    """The node stalls 0.4 s (> switch delay); the first sample it then takes is B's, A's follow at once."""
+    tr = SourceTracker(switch_after_ns=250 * MS)
+    for k in range(100):                                  # A followed, B interleaved (numbers behind)
+        assert tr.observe(5000 + k, 10 * k * MS)
+        assert not tr.observe(1 + k, (10 * k + 5) * MS)
+    t = 1000 * MS + 400 * MS
+    used = []
+    for k in range(40):                                   # the backlog, B first, 10 µs apart
+        used.append(("B", tr.observe(200 + k, t)))
+        used.append(("A", tr.observe(5200 + k, t + 5000)))
+        t += 10_000
+    assert all(u for who, u in used if who == "A") and not any(u for who, u in used if who == "B")
+    assert tr.switches == 0
 
 
 def test_unknown_sequence_is_one_source():

@@ -31,10 +31,13 @@ Policy (documented in docs/node.md): the twin **follows the first source**.
 Samples of any other source are still logged (the node logs every received
 message before this decision) and counted (``other_source``) but not used.
 When the followed source has been silent for ``switch_after_ns`` (a dead
-sensor, or the same bench node restarted: a new writer starts again at 1),
-the next source that delivers is followed from then on (counted as a
-switch).  More than one source active within ``ACTIVE_WINDOW_NS`` is a WARN
-on ``/diagnostics``.
+sensor, or the same bench node restarted: a new writer starts again at 1)
+while other sources delivered 5 samples in a row, the source that delivered
+the last of them is followed from then on (counted as a switch).  Both
+conditions, because the node's receive times stall with the node: after a
+stall the first sample taken may be the other source's, but the followed
+source's samples come right after it.  More than one source active within
+``ACTIVE_WINDOW_NS`` is a WARN on ``/diagnostics``.
 """
 from __future__ import annotations
 
@@ -46,6 +49,7 @@ ACTIVE_WINDOW_NS = 1_000_000_000      #: a source that delivered within this [ns
 _FORGET_NS = 30_000_000_000           #: a source silent this long [ns] is forgotten
 _MAX_SOURCES = 64
 _JUMP = 16                            #: a forward step above this is remembered as a jump (see above)
+_SWITCH_SAMPLES = 5                   #: samples of other sources in a row needed (with the silence) to switch
 
 
 @dataclass
@@ -74,17 +78,22 @@ class SourceTracker:
         self.other_samples = 0                  #: samples of other sources: logged, not used
         self.switches = 0                       #: times the followed source changed
         self.sources_seen = 0                   #: distinct sources since start
+        self._others_in_row = 0                 #: samples of other sources since the followed one's last
 
     def observe(self, sequence: int | None, receive_ns: int) -> bool:
         """Attribute one sample; True if it comes from the followed source (use it), False otherwise."""
         if sequence is None or sequence <= 0:
             return True
-        src = self._attribute(int(sequence), int(receive_ns))
         fol = self._find(self.followed)
-        if fol is None or (fol is not src and receive_ns - fol.last_receive > self.switch_after_ns):
+        silent_ns = None if fol is None else receive_ns - fol.last_receive
+        src = self._attribute(int(sequence), int(receive_ns))
+        self._others_in_row = 0 if src is fol else self._others_in_row + 1
+        if fol is None or (src is not fol and silent_ns > self.switch_after_ns
+                           and self._others_in_row >= _SWITCH_SAMPLES):
             if self.followed is not None:
                 self.switches += 1
             self.followed = src.ident
+            self._others_in_row = 0
         if src.ident != self.followed:
             self.other_samples += 1
             return False
