@@ -381,8 +381,6 @@ class TwinCore:
                 for ch in self._channels.values():
                     ch.drop_after(now_ns)
                     ch.last_stamp = None
-                for tr in self._sources.values():
-                    tr.reset()
             self._t_ns = None
         self._last_now = now_ns
         target = (now_ns // S) * S

@@ -37,7 +37,9 @@ the last of them is followed from then on (counted as a switch).  Both
 conditions, because the node's receive times stall with the node: after a
 stall the first sample taken may be the other source's, but the followed
 source's samples come right after it.  More than one source active within
-``ACTIVE_WINDOW_NS`` is a WARN on ``/diagnostics``.
+``ACTIVE_WINDOW_NS`` is a WARN on ``/diagnostics``.  A clock jump back (bag
+loop) changes nothing here: publication sequence numbers do not jump with
+the clock.
 """
 from __future__ import annotations
 
@@ -134,8 +136,3 @@ class SourceTracker:
     def active(self, now_ns: int, window_ns: int = ACTIVE_WINDOW_NS) -> int:
         """Sources that delivered within ``window_ns`` before ``now_ns``."""
         return sum(1 for s in self._sources if 0 <= now_ns - s.last_receive <= window_ns)
-
-    def reset(self) -> None:
-        """Forget the sources (clock jump back); counters are kept."""
-        self._sources.clear()
-        self.followed = None
