@@ -145,7 +145,7 @@ class TwinCore:
         self._S = s.sample_ns
         self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s, self._stamp_guard())
                           for k, spec in INPUTS.items()}
-        self._sources = {k: SourceTracker(switch_after_ns=int(s.stale_timeout_s * NS / 2)) for k in INPUTS}
+        self._sources = {k: SourceTracker(switch_after_ns=int(s.stale_timeout_s * NS)) for k in INPUTS}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
