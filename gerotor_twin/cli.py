@@ -2,7 +2,10 @@
 
 Subcommands: ``geometry``, ``simulate``, ``demo`` (and those registered by
 sub-packages, e.g. the bearing benchmark).  User errors print one line
-``error: <field> = <value> is invalid; allowed: <range>`` and exit with 2.
+``error: <field> = <value> is invalid; allowed: <range>`` and exit with 2,
+for every command: :class:`~gerotor_twin.errors.InputError`, unreadable MCAP
+input and any ``OSError`` on a path the user gave (a directory, no
+permission) are caught here, the line bounded in length.
 """
 from __future__ import annotations
 
@@ -14,7 +17,8 @@ import time
 from pathlib import Path
 
 from .bearing.registry import MODEL_NAMES
-from .errors import InputError
+from .errors import InputError, clip, one_line
+from .io.reader import McapReadError
 from .units import m3s_to_lpm, pa_abs_to_bar_gauge
 
 __all__ = ["main", "build_parser"]
@@ -243,8 +247,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except InputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    except (InputError, McapReadError) as exc:
+        print(f"error: {one_line(exc)}", file=sys.stderr)
+        return 2
+    except OSError as exc:        # a path the user gave: directory, permission, missing (one line, exit 2)
+        name = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"error:{clip(name)}: {clip(exc.strerror or str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -11,8 +11,6 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .errors import InputError, check_range
 from .geometry.gerotor import GerotorGeometry
 from .geometry.ports import Port
@@ -273,12 +271,12 @@ def _check_ports(s: Port, d: Port) -> None:
 
 
 def load_config(path: str | Path | None = None) -> PumpConfig:
-    """Load and validate a pump YAML file (default: ``config/pump.yaml``)."""
+    """Load and validate a pump YAML file (default: ``config/pump.yaml``).
+
+    Read with :func:`gerotor_twin.yaml_safe.load_yaml_file` (size and alias
+    expansion bounded); every problem raises one :class:`InputError`.
+    """
+    from .yaml_safe import load_yaml_file
     p = Path(path) if path is not None else default_config_path()
-    if not p.exists():
-        raise InputError("--config", str(p), "an existing YAML file", "file not found")
-    try:
-        raw = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError("--config", str(p), "valid YAML", str(exc).splitlines()[0]) from None
+    raw = load_yaml_file(p, "--config")       # missing, directory, unreadable, bomb: one InputError
     return parse_config(raw, source=str(p))

@@ -7,9 +7,43 @@ the node can put the same text on ``/diagnostics``.
 from __future__ import annotations
 
 import math
+import reprlib
 from typing import Any
 
-__all__ = ["InputError", "check_range", "check_finite"]
+__all__ = ["InputError", "check_range", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS"]
+
+#: Longest error line printed or put on /diagnostics [characters]; each part of an
+#: :class:`InputError` (field, value, allowed, reason) is clipped to a share of it.
+MAX_ERROR_CHARS = 600
+_PART_CHARS = 120
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict, _REPR.maxset = 2, 4, 4, 4, 4
+_REPR.maxstring, _REPR.maxother, _REPR.maxlong = _PART_CHARS, _PART_CHARS, 40
+
+
+def clip(text: str, limit: int = _PART_CHARS) -> str:
+    """``text`` on one line, at most ``limit`` characters (a cut is marked with the full length)."""
+    s = str(text)
+    head = " ".join(s[:limit + 1].split()) if ("\n" in s[:limit + 1] or "\r" in s[:limit + 1]) else s[:limit + 1]
+    if len(s) <= limit and len(head) <= limit:
+        return head
+    tail = f"... ({len(s)} chars)"
+    return head[:max(0, limit - len(tail))] + tail
+
+
+def short_repr(value: Any, limit: int = _PART_CHARS) -> str:
+    """A bounded ``repr``: time and size bounded whatever the value (nested, shared, huge)."""
+    try:
+        text = _REPR.repr(value)
+    except Exception:  # noqa: BLE001 - a repr that fails must not hide the error being reported
+        text = f"<{type(value).__name__}>"
+    return clip(text, limit)
+
+
+def one_line(exc: BaseException | str, limit: int = MAX_ERROR_CHARS) -> str:
+    """The message of ``exc`` as one bounded line (for ``error: ...`` and /diagnostics)."""
+    return clip(str(exc), limit)
 
 
 class InputError(ValueError):
@@ -32,9 +66,9 @@ class InputError(ValueError):
         self.value = value
         self.allowed = allowed
         self.reason = reason
-        msg = f"{field} = {value!r} is invalid; allowed: {allowed}"
+        msg = f"{clip(field)} = {short_repr(value)} is invalid; allowed: {clip(allowed)}"
         if reason:
-            msg += f" ({reason})"
+            msg += f" ({clip(reason)})"
         super().__init__(msg)
 
 

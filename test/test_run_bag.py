@@ -151,3 +151,42 @@ def test_node_and_run_bag_agree(tmp_path):
     assert res["figures_drawn"] == 6 and len(res["plateaus"]) == 1
     a, b = (t["overall"]["flow_error_m3s"]["bias"] for t in res["twins"])
     assert abs(a - b) < 2e-3 * np.mean(vo[sel, 0])
+
+
+def _bag(path, speed=157.0, n=200, speed_topic=True, speed_msgs=True):
+    """A 1 s bench bag at 200 Hz; the speed topic may be declared but empty, or carry a bad value."""
+    from gerotor_twin.io import McapLog
+    from gerotor_twin.io import messages as m
+    t0 = 1_700_000_000_000_000_000
+    with McapLog(path, overwrite=True) as log:
+        log.add_topic("/bench/delivery_pressure", m.FLUID_PRESSURE, qos="sensor")
+        if speed_topic:
+            log.add_topic("/bench/shaft_speed", m.JOINT_STATE, qos="sensor")
+        for k in range(n):
+            ns = t0 + k * 5_000_000
+            log.write("/bench/delivery_pressure", m.fluid_pressure(ns, 101325.0 + 10e5), ns)
+            if speed_topic and speed_msgs:
+                log.write("/bench/shaft_speed", m.joint_state(ns, name=["s"], velocity=[speed]), ns)
+    return path
+
+
+def test_required_topic_present_but_empty_exit_2(tmp_path, capsys):
+    """Behaviour: a dead sensor (topic declared, no messages) is refused naming the topic, like a missing one."""
+    p = _bag(tmp_path / "dead.mcap", speed_msgs=False)
+    with pytest.raises(McapReadError, match=r"/bench/shaft_speed .* holds no messages"):
+        rb.run_bag(p, tmp_path / "o.mcap", progress=None)
+    assert main(["run-bag", str(p), "-o", str(tmp_path / "o2.mcap"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "/bench/shaft_speed" in err[0] and "holds no messages" in err[0]
+
+
+@pytest.mark.parametrize("speed,needle", [(float("nan"), "nonfinite"), (-500.0, "negative"), (1e4, "out_of_range")])
+def test_inputs_the_twin_cannot_use_exit_2(tmp_path, capsys, speed, needle):
+    """Behaviour: every speed sample rejected -> no prediction: exit 2 with the reason; inputs still written."""
+    p = _bag(tmp_path / "bad.mcap", speed=speed)
+    out = tmp_path / "o.mcap"
+    assert main(["run-bag", str(p), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "never started" in err[0] and needle in err[0] and "shaft_speed" in err[0], err
+    s = read_topics(out)
+    assert len(s["/bench/shaft_speed"]) == 200 and len(s["/bench/delivery_pressure"]) == 200

@@ -144,3 +144,14 @@ def test_bundled_bags_match_the_current_pump_config(cfg, name):
     got, want = flat(recorded), flat(expected)
     for key in [k for k in want if k.split(".")[0] in ("gears", "clearances", "ports", "fluid", "leakage")]:
         assert got[key] == pytest.approx(want[key], rel=1e-9), (name, key, meta["command"])
+
+
+@pytest.mark.parametrize("args,needle", [(("--speed-rate", "0"), "speed_rate_hz = 0.0"),
+                                         (("--seed", "-5"), "seed = -5"),
+                                         (("--flow-rate", "nan"), "flow_rate_hz = nan")])
+def test_unusable_settings_one_line(tmp_path, capsys, args, needle):
+    """Behaviour: settings synth-bench cannot use give one line and exit 2 (0 Hz was a ZeroDivisionError)."""
+    from gerotor_twin.cli import main
+    assert main(["synth-bench", "--profile", "test", "-o", str(tmp_path / "x.mcap"), "--quiet", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0]

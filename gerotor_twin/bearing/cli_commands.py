@@ -19,7 +19,7 @@ from gerotor_twin.bearing.closed_form import ocvirk_attitude_angle, ocvirk_eccen
 from gerotor_twin.bearing.geometry import TABLE1
 from gerotor_twin.bearing.reynolds_fd import parse_grid
 from gerotor_twin.bearing.simulate import settle
-from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.errors import InputError, check_range, one_line
 
 __all__ = ["register", "cmd_bearing_steady", "cmd_bearing_benchmark", "main"]
 
@@ -180,7 +180,7 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except InputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
 
 

@@ -92,11 +92,16 @@ class BenchSpec:
     warmup_s: float = 0.3
     start_time_ns: int = 1_735_689_600_000_000_000   # 2025-01-01T00:00:00Z
 
+    def __post_init__(self):
+        from gerotor_twin.errors import InputError
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed < 2**63:
+            raise InputError("seed", self.seed, "an integer in [0, 2^63)")
+
     def decimation(self, rate_hz: float, field: str) -> int:
         """Ticks per published sample for a topic rate [Hz]; InputError if not a divisor."""
         from gerotor_twin.errors import InputError
-        n = self.internal_rate_hz / rate_hz
-        if not (rate_hz > 0 and abs(n - round(n)) < 1e-9 and round(n) >= 1):
+        n = self.internal_rate_hz / rate_hz if rate_hz > 0 else math.nan      # 0, negative, NaN: refused
+        if not math.isfinite(n) or abs(n - round(n)) >= 1e-9 or round(n) < 1:
             raise InputError(field, rate_hz, f"a divisor of the internal rate {self.internal_rate_hz:g} Hz")
         return int(round(n))
 

@@ -33,7 +33,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence, Union
 
-import yaml
 
 from gerotor_twin.errors import InputError
 
@@ -167,11 +166,8 @@ def parse_offered_qos(text: str) -> list[QosProfile]:
     InputError
         If the text is not a YAML sequence of complete profile maps.
     """
-    try:
-        node = yaml.safe_load(text) if text.strip() else []
-    except yaml.YAMLError as exc:
-        raise InputError("offered_qos_profiles", text, "a YAML sequence of QoS maps",
-                         str(exc).splitlines()[0]) from None
+    from gerotor_twin.yaml_safe import load_yaml
+    node = load_yaml(text, "offered_qos_profiles", max_nodes=10_000) if text.strip() else []
     if not isinstance(node, list):
         raise InputError("offered_qos_profiles", text, "a YAML sequence of QoS maps")
     out = []

@@ -23,7 +23,7 @@ from typing import IO
 import yaml
 
 from gerotor_twin.config import load_config
-from gerotor_twin.errors import InputError
+from gerotor_twin.errors import InputError, one_line
 from gerotor_twin.io import McapLog, McapReadError, open_mcap
 from gerotor_twin.io.mcap_log import NODE_PARAMETERS_METADATA, PUMP_CONFIG_METADATA
 from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
@@ -58,6 +58,29 @@ def _topic_kinds(types: dict[str, str], path) -> dict[str, str]:
     return kinds
 
 
+def _require_messages(rows: list, kinds: dict[str, str], path) -> None:
+    """Every required input topic holds messages (a topic that is there but empty is a dead sensor)."""
+    count = dict.fromkeys(kinds, 0)
+    for _, _, ch, _ in rows:
+        count[ch.topic] += 1
+    empty = [f"topic {t} ({INPUTS[k].msgtype}) is in the bag but holds no messages (dead sensor or "
+             "recorder?); the twin needs it" for t, k in kinds.items() if INPUTS[k].required and not count[t]]
+    if empty:
+        raise McapReadError(path, "; ".join(empty))
+
+
+def _require_prediction(core: TwinCore, t_last: int, n_in: int, output) -> None:
+    """The model ran at least once; else name why (every sample rejected, inputs never together ...)."""
+    if core.stats["initialised"]:
+        return
+    snap = core.snapshot(t_last)
+    rejected = ", ".join(f"{k} {r} {n}" for k, v in snap["inputs"].items() for r, n in v["rejected"].items() if n)
+    last = next((v["last_error"] for v in snap["inputs"].values() if v["last_error"]), "")
+    raise McapReadError(output, f"the twin never started over the {n_in} input messages ({snap['reason']}); "
+                                f"rejected: {rejected or 'none'}{'; last error: ' + last if last else ''}. "
+                                "The inputs were written to the output, no prediction")
+
+
 def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings: TwinSettings | None = None,
             overwrite: bool = False, progress: IO[str] | None = sys.stderr) -> dict:
     """Run the twin core over a bench bag and write the node's topics to ``output``.
@@ -85,7 +108,9 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
     Raises
     ------
     McapReadError
-        Unreadable bag or missing required topics.
+        Unreadable bag, a required topic missing, of another type or holding no
+        messages; or inputs the twin cannot use (the model never started: every
+        sample rejected, ...; the output is written, with the inputs).
     InputError
         Bad model name or settings.
     """
@@ -96,8 +121,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
     rows = []
     for ch, msg in f.iter_raw(list(kinds)):
         rows.append((msg.log_time, msg.publish_time, ch, msg))
-    if not rows:
-        raise McapReadError(f.path, "no bench input messages")
+    _require_messages(rows, kinds, f.path)
     rows.sort(key=lambda r: r[0])
     cfg = load_config(config_path)
     settings = settings or TwinSettings(max_span_s=math.inf)
@@ -136,7 +160,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
             while log_ns >= next_tick:
                 tick(next_tick)
                 next_tick += _TICK_NS
-            core.add_message(kinds[ch.topic], f.decode(ch, msg), log_ns)
+            core.add_message(kinds[ch.topic], f.decode(ch, msg), log_ns, sequence=msg.sequence or None)
             log.write_raw(ch.topic, msg.data, log_ns, pub_ns, sequence=msg.sequence)
             n_in += 1
             now_w = time.monotonic()
@@ -152,6 +176,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
         stats = core.snapshot(t_last)
     finally:
         log.close()
+    _require_prediction(core, t_last, n_in, output if isinstance(output, (str, Path)) else "output")
     wall = time.monotonic() - wall0
     if progress is not None:
         print(f"\rrun-bag [{'#' * 30}] 100.0 % done in {wall:.0f} s" + " " * 30, file=progress, flush=True)
@@ -169,7 +194,7 @@ def cmd_run_bag(args) -> int:
         res = run_bag(args.bag, out, model=args.model, config_path=args.config, overwrite=args.overwrite,
                       progress=None if args.quiet else sys.stderr)
     except McapReadError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
     print(f"wrote {out}: {res['inputs']} inputs, {res['outputs']} outputs, {res['revolutions']} revolutions, "
           f"{res['simulated_s']:.1f} s simulated in {res['wall_s']:.1f} s (RTF {res['real_time_factor']:.2f})")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gerotor_twin.errors import InputError
+from gerotor_twin.errors import InputError, one_line
 
 from . import figures as F
 from .analysis import compare, find_plateaus, make_grid
@@ -148,7 +148,7 @@ def cmd_report(args) -> int:
     try:
         res = build_report(args.bench, args.twin, args.output, args.json, args.label)
     except McapReadError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
     print(f"wrote {args.output}" + (f" and {args.json}" if args.json else ""))
     for n in res["notes"]:

@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from gerotor_twin.io import McapReadError, TruncatedMcapWarning, open_mcap, read_topics
 from gerotor_twin.io import messages as m
@@ -201,9 +200,11 @@ def load_twin(path: str | Path, t0_ns: int, label: str | None = None) -> TwinDat
 def pump_config(twin: TwinData):
     """The twin's pump configuration (from the log's metadata, else ``config/pump.yaml``)."""
     from gerotor_twin.config import load_config, parse_config
+    from gerotor_twin.yaml_safe import load_yaml
     if twin.pump_config_yaml:
         try:
-            return parse_config(yaml.safe_load(twin.pump_config_yaml), source=f"{twin.path} metadata")
+            raw = load_yaml(twin.pump_config_yaml, f"{twin.path} metadata pump_config")
+            return parse_config(raw, source=f"{twin.path} metadata")
         except Exception:   # noqa: BLE001 - fall back to the default pump, noted by the caller
             pass
     return load_config()

@@ -16,7 +16,13 @@ What it does
       encodes every output once with the project codec, publishes those bytes
       (reliable QoS) and logs the same bytes (``log_time`` = prediction time);
     * publishes ``/diagnostics`` (core statuses + MCAP log status) at
-      ``diagnostics_rate_hz``, and once as soon as it is ready;
+      ``diagnostics_rate_hz``, and once as soon as it is ready; under
+      ``use_sim_time`` on a wall-clock (steady) timer, so a ``/clock`` that
+      stops is reported (``clock stalled``, WARN, stamped with the last clock
+      time); nothing is published before the first ``/clock``;
+    * more than one publisher on an input topic: the first source is followed
+      (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs)
+      are listed and WARNed on ``/diagnostics``;
     * one single-threaded executor: a tick integrates at most ``max_span_s``
       (lag policy), inputs wait in the subscription history
       (``input_queue_depth``) meanwhile; rclpy's multi-threaded executor was
@@ -44,10 +50,11 @@ from rclpy.node import Node  # noqa: E402
 from rclpy.qos import (HistoryPolicy, QoSProfile, ReliabilityPolicy, DurabilityPolicy)  # noqa: E402
 from rclpy.signals import SignalHandlerOptions  # noqa: E402
 
-from gerotor_twin.errors import InputError  # noqa: E402
+from gerotor_twin.errors import InputError, clip, one_line  # noqa: E402
 from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
+from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
@@ -72,12 +79,12 @@ def _msg_class(msgtype: str):
 class TwinNode(Node):
     """The digital-twin node; see the module docstring."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, param_values: dict | None = None, **kwargs):
         super().__init__("twin_node", **kwargs)
         from gerotor_twin.config import default_config_path, load_config
         from gerotor_twin.model.pump import Inputs, PumpModel
 
-        self.prm = P.declare(self)
+        self.prm = P.declare(self, param_values)
         prm = self.prm
         cfg_path = prm["pump_config"] or str(default_config_path())
         self.config = load_config(cfg_path)
@@ -88,7 +95,8 @@ class TwinNode(Node):
         self.settings = TwinSettings(
             sample_period_s=sp, publish_period_s=every * sp, max_span_s=prm["max_span_s"],
             stale_timeout_s=prm["stale_timeout_s"], filter_tau_s=prm["input_filter_tau_s"],
-            stamp_restart_s=prm["stamp_restart_s"], waveform_every=prm["waveform_every"],
+            stamp_restart_s=prm["stamp_restart_s"], stamp_ahead_s=prm["stamp_ahead_s"],
+            stamp_rebase_samples=prm["stamp_rebase_samples"], waveform_every=prm["waveform_every"],
             waveform_samples=prm["waveform_samples"])
         self.core = TwinCore(self.model, self.settings)
         self._warm_up(Inputs)
@@ -121,8 +129,9 @@ class TwinNode(Node):
         self._open_log()
         self.tick_timer = self.create_timer(1.0 / prm["tick_rate_hz"], self._safe(self._tick),
                                             callback_group=self._tick_group)
+        self.clock_watch = ClockWatch(prm["clock_stall_s"])
         self.diag_timer = self.create_timer(1.0 / prm["diagnostics_rate_hz"], self._safe(self._diagnostics),
-                                            callback_group=self._diag_group)
+                                            callback_group=self._diag_group, clock=self._diagnostics_clock())
         self.startup_s = time.monotonic() - _T_START
         self._diagnostics()                      # a first /diagnostics right away: "ready"
         self.get_logger().info(
@@ -159,7 +168,7 @@ class TwinNode(Node):
 
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
-        self.last_callback_error = f"{type(exc).__name__}: {exc}"
+        self.last_callback_error = clip(f"{type(exc).__name__}: {exc}", 300)
         if self.callback_errors in (1, 10, 100, 1000) or self.callback_errors % 10000 == 0:
             self.get_logger().error(f"callback error #{self.callback_errors}: {self.last_callback_error}\n"
                                     + traceback.format_exc(limit=5))
@@ -181,17 +190,18 @@ class TwinNode(Node):
                 self.log_files.before_clock += 1
                 return
             log = self.log
+            seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+            seq = seq if isinstance(seq, int) and 0 < seq < 2**63 else None     # per publisher; None: unknown
             if log is not None:
                 src = info.get("source_timestamp") if isinstance(info, dict) else None
-                seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
                 log.write_raw(self.subs[kind].topic_name, data, recv, src or recv,
-                              sequence=seq if isinstance(seq, int) and 0 <= seq < 2**32 else None)
+                              sequence=seq if seq is not None and seq < 2**32 else None)
             try:
                 msg = decode(msgtype, data)
             except InputError as exc:
                 self.core.reject(kind, str(exc), recv)
                 return
-            self.core.add_message(kind, msg, recv)
+            self.core.add_message(kind, msg, recv, sequence=seq)
 
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
             try:
@@ -217,13 +227,21 @@ class TwinNode(Node):
         for level, text in self.core.pop_events():
             (logger.error if level >= 2 else logger.warning)(text)
 
+    def _diagnostics_clock(self):
+        """Wall (steady) clock for /diagnostics under use_sim_time, so a stopped /clock is reported."""
+        if not self.prm["use_sim_time"]:
+            return None
+        from rclpy.clock import Clock, ClockType
+        return Clock(clock_type=ClockType.STEADY_TIME)
+
     def _diagnostics(self) -> None:
         if self.stopping:
             return
         now = self.get_clock().now().nanoseconds
-        if not self._clock_valid(now):      # use_sim_time before the first /clock: nothing stamped 0
-            return
-        extra = [self._node_status()]
+        clock = self.clock_watch.update(now, time.monotonic())
+        if clock.status == "waiting" or not self._clock_valid(now):
+            return                               # no valid time to stamp it with yet (sim time before /clock)
+        extra = [self._node_status(clock)]
         with self._core_lock:
             diag = self.core.diagnostics(now, extra)
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
@@ -231,17 +249,40 @@ class TwinNode(Node):
         if self.log is not None and self.log_files.due(DIAGNOSTICS_TOPIC, diag):
             self.log.write_raw(self.fq[DIAGNOSTICS_TOPIC], data, now, now)
 
-    def _node_status(self) -> dict:
+    def _node_status(self, clock=None) -> dict:
         values = {"startup_s": round(self.startup_s, 3), "callback_errors": self.callback_errors,
                   "last_callback_error": self.last_callback_error,
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
+        many = self._input_publishers(values)
+        if many:
+            level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
+        if clock is not None:
+            values.update({"clock_status": clock.status, "clock_unchanged_s": round(clock.unchanged_s, 3),
+                           "clock_stalls": self.clock_watch.stalls})
+            if clock.status == "stalled":
+                level, msg = m.DIAG_WARN, clock.describe()
         log_level, log_msg, log_values = self.log_files.status(self.log)
         values.update(log_values)
         if log_level >= level and log_msg:
             level, msg = log_level, log_msg
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
+
+    def _input_publishers(self, values: dict) -> list[str]:
+        """Publishers of each input topic from the ROS graph into ``values``; topics with more than one."""
+        many = []
+        for kind, sub in self.subs.items():
+            try:
+                infos = self.get_publishers_info_by_topic(sub.topic_name)
+            except Exception:  # noqa: BLE001 - graph query during shutdown
+                continue
+            names = [f"{i.node_namespace.rstrip('/')}/{i.node_name} (gid {bytes(i.endpoint_gid)[:8].hex()})"
+                     for i in infos]
+            values[f"publishers.{kind}"] = clip(f"{len(names)}: {', '.join(names)}", 300)
+            if len(names) > 1:
+                many.append(clip(f"{sub.topic_name} ({', '.join(names)})", 200))
+        return many
 
     # -------------------------------------------------------------- shutdown
     def close_log(self) -> None:
@@ -252,10 +293,32 @@ class TwinNode(Node):
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
 
 
+def _validated_parameters(args: list[str]) -> dict | None:
+    """Every parameter the command line gives (params files and ``-p``), validated; None after printing why.
+
+    Done before ``rclpy.init`` so a missing or malformed params file, an
+    unknown name or a bad value is one line and exit 2 (rcl would print a
+    traceback or silently drop it, see :mod:`gerotor_twin.ros.param_args`).
+    """
+    from gerotor_twin.ros.param_args import overrides_from_args
+    try:
+        return P.check_overrides(overrides_from_args(list(args), "twin_node"))
+    except InputError as exc:
+        print(f"error: {one_line(exc)}", file=sys.stderr)
+        return None
+
+
 def main(argv=None) -> int:
     """Console entry point ``twin_node`` (also ``ros2 run gerotor_twin twin_node``)."""
     args = sys.argv if argv is None else argv
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    param_values = _validated_parameters(args)
+    if param_values is None:
+        return 2
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except Exception as exc:  # noqa: BLE001 - rcl refused the command line (RCLError): one line, exit 2
+        print(f"error: {one_line(str(exc).split(', at /')[0])}", file=sys.stderr)
+        return 2
     stop = threading.Event()
     node = None
     executor = None
@@ -275,11 +338,11 @@ def main(argv=None) -> int:
     code = 0
     try:
         try:
-            node = TwinNode()
+            node = TwinNode(param_values)
         except Exception as exc:  # noqa: BLE001 - one line for the user, exit 2
             from rclpy.exceptions import InvalidParameterValueException, ParameterException
             if isinstance(exc, (InputError, InvalidParameterValueException, ParameterException, OSError)):
-                print(f"error: {exc}", file=sys.stderr)
+                print(f"error: {one_line(exc)}", file=sys.stderr)
                 return 2
             raise
         # rclpy's MultiThreadedExecutor costs more than it gains here (measured: node RTF 0.8 vs 1.8

@@ -1,20 +1,33 @@
-"""Parameters of ``twin_node``: names, defaults, units, ranges (declared with descriptors).
+"""Parameters of ``twin_node``: names, defaults, units, ranges; validation of every value given.
 
 :data:`PARAMETERS` is plain data (no rclpy), so the README table, the MCAP
-metadata and the node share one definition.  :func:`declare` declares them on
-an rclpy node with ``ParameterDescriptor`` (description with the unit,
-``FloatingPointRange`` / ``IntegerRange``, read-only: they are read once at
-start) after registering a set-parameters callback that refuses values outside
-a choice list with a reason naming the parameter, the value and the allowed
-set.  An out-of-range override from ``--params-file`` is refused by rclpy
-itself (``InvalidParameterValueException``).
+metadata and the node share one definition.
+
+Validation (:func:`check_overrides`, no rclpy): every value given to the node
+(params files and ``-p``, read by :mod:`gerotor_twin.ros.param_args`, or the
+overrides rclpy holds) is checked the same way: an unknown name is refused
+with the closest known names (``difflib``), a value of the wrong type, out of
+range or not in a choice list is refused naming the parameter, the value, the
+allowed range and where it came from.  The node exits 2 with that one line.
+
+:func:`declare` declares the parameters on an rclpy node with
+``ParameterDescriptor`` (description with the unit, ``FloatingPointRange`` /
+``IntegerRange``) using the validated values (rclpy's own merge of the
+overrides is bypassed, see :mod:`~gerotor_twin.ros.param_args`), then
+registers a set-parameters callback that refuses every change at run time
+with the reason it cannot be honoured live (:func:`fixed_reason`); none of
+the parameters, ``use_sim_time`` included, is applied live.
 """
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Mapping
 
-__all__ = ["Param", "PARAMETERS", "declare", "values"]
+from gerotor_twin.errors import InputError, check_range, short_repr
+
+__all__ = ["Param", "PARAMETERS", "BUILTIN", "declare", "values", "check_value", "check_overrides",
+           "fixed_reason", "refuse_change"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +50,8 @@ PARAMETERS: tuple[Param, ...] = (
     Param("publish_rate_hz", 50.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
+    Param("clock_stall_s", 1.0, "the node clock unchanged this long in wall time is reported as stalled on "
+                                "/diagnostics (use_sim_time: /clock stopped) [s]", 0.01, 3600.0),
     Param("shaft_speed_topic", "bench/shaft_speed", "sensor_msgs/JointState input, velocity[0] [rad/s]"),
     Param("delivery_pressure_topic", "bench/delivery_pressure", "sensor_msgs/FluidPressure input, absolute [Pa]"),
     Param("suction_pressure_topic", "bench/suction_pressure",
@@ -51,6 +66,10 @@ PARAMETERS: tuple[Param, ...] = (
     Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),
     Param("stamp_restart_s", 1.0, "a header stamp this much older than the last one is a source restart [s]",
           0.0, 3600.0),
+    Param("stamp_ahead_s", 0.5, "a header stamp this much further ahead of its receive time than the stream's "
+                                "usual offset is implausible: that sample alone is rejected [s]", 0.001, 3600.0),
+    Param("stamp_rebase_samples", 3, "consecutive consistent samples rejected for their stamp after which the "
+                                     "stamp order re-anchors on them [samples]", 1, 1000),
     Param("max_span_s", 0.25, "lag policy: most clock time integrated per tick; older backlog is skipped [s]",
           0.001, 3600.0),
     Param("waveform_every", 1, "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",
@@ -82,30 +101,134 @@ PARAMETERS: tuple[Param, ...] = (
 )
 
 
-def declare(node) -> dict[str, Any]:
-    """Declare :data:`PARAMETERS` on ``node`` (rclpy) and return their values.
+#: Parameters rclpy declares itself on every node (Jazzy): name -> default.
+BUILTIN: dict[str, Any] = {"use_sim_time": False, "start_type_description_service": True}
+
+_BY_NAME = {p.name: p for p in PARAMETERS}
+
+
+_TYPE_WORDS = {str: "a string", int: "an integer", float: "a double", bool: "a bool", list: "a list",
+               dict: "a mapping", type(None): "no value"}
+
+
+def _kind(default: Any) -> str:
+    if isinstance(default, bool):
+        return "bool"
+    if isinstance(default, int):
+        return "integer"
+    if isinstance(default, float):
+        return "double"
+    return "string"
+
+
+def check_value(name: str, value: Any, source: str = "") -> Any:
+    """Validate one value for parameter ``name``; returns it typed (an integer given for a double becomes float).
 
     Raises
     ------
-    rclpy.exceptions.InvalidParameterValueException
-        A value out of range or not in its choice list (the reason names both).
+    InputError
+        Unknown name (with the closest known ones), wrong type, out of range,
+        not in the choice list; the field reads ``<source>: <name>``.
+    """
+    field = f"{source}: {name}" if source else name
+    spec = _BY_NAME.get(name)
+    default = spec.default if spec is not None else BUILTIN.get(name, None)
+    if spec is None and name not in BUILTIN:
+        known = [p.name for p in PARAMETERS] + list(BUILTIN)
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        hint = f"did you mean {' or '.join(close)}?" if close else "see `ros2 param list` / README for the names"
+        raise InputError(field, value, "a parameter of twin_node", f"unknown parameter; {hint}")
+    kind = _kind(default)
+    ok = {"bool": isinstance(value, bool),
+          "integer": isinstance(value, int) and not isinstance(value, bool),
+          "double": isinstance(value, (int, float)) and not isinstance(value, bool),
+          "string": isinstance(value, str)}[kind]
+    if not ok:
+        quote = " (quote it to make it a string)" if kind == "string" else ""
+        got = _TYPE_WORDS.get(type(value), type(value).__name__)
+        raise InputError(field, value, f"{'an' if kind == 'integer' else 'a'} {kind}{quote}", f"got {got}")
+    if kind == "double":
+        value = float(value)
+    if spec is not None and spec.lo is not None:
+        unit = spec.description.rsplit("[", 1)[-1].split("]")[0] if "[" in spec.description else ""
+        if kind == "integer":
+            if not spec.lo <= value <= spec.hi:
+                raise InputError(field, value, f"an integer in [{int(spec.lo)}, {int(spec.hi)}] {unit}".strip())
+        else:
+            check_range(field, value, spec.lo, spec.hi, unit=unit)       # also refuses NaN / inf
+    if spec is not None and spec.choices and value not in spec.choices:
+        raise InputError(field, value, " | ".join(spec.choices))
+    return value
+
+
+def check_overrides(overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """Validate every given value: ``{name: Override or plain value}`` -> ``{name: typed value}``.
+
+    Raises
+    ------
+    InputError
+        For the first bad one (unknown names first, so a typo is reported even
+        when another value is also wrong).
+    """
+    items = [(n, getattr(o, "value", o), getattr(o, "source", "")) for n, o in overrides.items()]
+    items.sort(key=lambda it: (it[0] in _BY_NAME or it[0] in BUILTIN))
+    return {n: check_value(n, v, src) for n, v, src in items}
+
+
+def fixed_reason(name: str) -> str:
+    """Why ``name`` cannot change while the node runs (the text of a refused ``ros2 param set``)."""
+    if name == "use_sim_time":
+        why = ("the clock source, the timers and the time base of the log are set up at start "
+               "(switching it would silently stop all outputs)")
+    elif name in ("pump_config", "bearing_model"):
+        why = "the pump model is built from it at start"
+    elif name.endswith("_topic") or name == "input_queue_depth":
+        why = "the subscriptions are created with it at start"
+    elif name.startswith("log_"):
+        why = "the MCAP log is opened with it at start"
+    else:
+        why = "the twin core and its timers are configured with it at start"
+    return f"{name} cannot change while the node runs: {why}; restart the node with -p {name}:=<value>"
+
+
+def refuse_change(current: Mapping[str, Any], params) -> tuple[bool, str]:
+    """Decision of the run-time set-parameters callback: ``(ok, reason)``.
+
+    ``params`` are objects with ``name`` and ``value``; setting a parameter to
+    its current value is allowed (a no-op), any other value of a known
+    parameter is refused with :func:`fixed_reason`.
+    """
+    for prm in params:
+        if prm.name in current and prm.value != current[prm.name]:
+            return False, fixed_reason(prm.name) + f" (asked: {short_repr(prm.value)})"
+    return True, ""
+
+
+def declare(node, given: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Declare :data:`PARAMETERS` on ``node`` (rclpy) with validated values; return all values.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+    given : mapping, optional
+        Values already validated by :func:`check_overrides` (from the command
+        line, :func:`gerotor_twin.ros.param_args.overrides_from_args`).  If
+        omitted, the overrides rclpy holds for the node are validated here
+        (unknown names refused the same way).
+
+    Raises
+    ------
+    InputError
+        An unknown or invalid value (one line naming it).
     """
     from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                     SetParametersResult)
+    from rclpy.parameter import Parameter
 
-    by_name = {p.name: p for p in PARAMETERS}
-
-    def check(params):
-        for prm in params:
-            spec = by_name.get(prm.name)
-            if spec is not None and spec.choices and prm.value not in spec.choices:
-                return SetParametersResult(successful=False, reason=(
-                    f"{prm.name} = {prm.value!r} is invalid; allowed: {' | '.join(spec.choices)}"))
-        return SetParametersResult(successful=True)
-
-    node.add_on_set_parameters_callback(check)
+    if given is None:
+        given = check_overrides({k: p.value for k, p in getattr(node, "_parameter_overrides", {}).items()})
     for p in PARAMETERS:
-        d = ParameterDescriptor(description=p.description, read_only=True)
+        d = ParameterDescriptor(description=p.description + " [fixed at start]")
         if p.choices:
             d.additional_constraints = "one of: " + ", ".join(p.choices)
         if p.lo is not None:
@@ -114,8 +237,17 @@ def declare(node) -> dict[str, Any]:
             else:
                 d.floating_point_range = [FloatingPointRange(from_value=float(p.lo), to_value=float(p.hi),
                                                              step=0.0)]
-        node.declare_parameter(p.name, p.default, d)
-    return values(node)
+        node.declare_parameter(p.name, given.get(p.name, p.default), d, ignore_override=True)
+    if "use_sim_time" in given and node.get_parameter("use_sim_time").value != given["use_sim_time"]:
+        node.set_parameters([Parameter("use_sim_time", value=given["use_sim_time"])])
+    current = values(node)
+
+    def on_set(params):
+        ok, reason = refuse_change(current, params)
+        return SetParametersResult(successful=ok, reason=reason)
+
+    node.add_on_set_parameters_callback(on_set)
+    return current
 
 
 def values(node) -> dict[str, Any]:

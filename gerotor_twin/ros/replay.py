@@ -22,7 +22,7 @@ import threading
 import time
 from typing import IO
 
-from gerotor_twin.errors import InputError
+from gerotor_twin.errors import InputError, one_line
 from gerotor_twin.io import McapReadError, open_mcap
 
 __all__ = ["load_messages", "replay", "add_parser"]
@@ -36,7 +36,7 @@ def load_messages(bag, topics=None) -> tuple[dict[str, str], list[tuple[int, str
     Raises
     ------
     McapReadError
-        Unreadable bag, a requested topic absent, or no messages.
+        Unreadable bag, a requested topic absent or empty, or no messages.
     """
     f = open_mcap(bag)
     types = f.topic_types()
@@ -51,6 +51,11 @@ def load_messages(bag, topics=None) -> tuple[dict[str, str], list[tuple[int, str
     rows = [(msg.log_time, ch.topic, bytes(msg.data)) for ch, msg in f.iter_raw(want)]
     if not rows:
         raise McapReadError(f.path, "no messages to replay on " + ", ".join(want))
+    if topics:
+        have = {t for _, t, _ in rows}
+        empty = [t for t in want if t not in have]
+        if empty:
+            raise McapReadError(f.path, f"topic(s) {', '.join(empty)} are in the bag but hold no messages")
     rows.sort(key=lambda r: r[0])
     return {t: types[t] for t in want}, rows
 
@@ -193,7 +198,7 @@ def cmd_replay(args) -> int:
                delay_s=args.delay, progress=None if args.quiet else sys.stderr,
                wait_subscribers=args.wait_subscribers)
     except McapReadError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
     return 0
 

@@ -47,6 +47,18 @@ rate-limited in :meth:`TwinCore.pop_events`)
       accepted value is held.  Slightly negative speeds are clamped to 0.
     * A stamp far older than the last one (``> stamp_restart_s``) is a restart
       of the source: accepted.
+    * A stamp implausibly ahead of its receive time (more than
+      ``stamp_ahead_s`` beyond the stream's usual offset) is rejected by itself
+      (``future_stamp``); the good stream that follows is accepted.  After
+      ``stamp_rebase_samples`` consecutive consistent samples rejected for
+      their stamp, the order re-anchors on them, so one bad stamp never blocks
+      the stream (:mod:`gerotor_twin.twin.stamps`).
+    * More than one publisher on an input topic: the first source is
+      followed, the others' samples counted (and logged by the node) but not
+      used; WARN on diagnostics (:mod:`gerotor_twin.twin.sources`).
+    * A header stamp of 0 (source does not stamp) is counted per input
+      (``zero_stamps``), reported (WARN on diagnostics in a period where it
+      happened) and the sample taken as unstamped.
     * A required input (speed, delivery pressure) not received, or older than
       ``stale_timeout_s``: the model is **held** (state frozen, nothing
       published, diagnostics STALE) until a fresh sample arrives; then it
@@ -82,6 +94,8 @@ from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
 from gerotor_twin.twin.settings import NS, TwinSettings
+from gerotor_twin.twin.sources import SourceTracker
+from gerotor_twin.twin.stamps import REBASE, RESTART, StampGuard
 
 __all__ = ["TwinCore", "TickResult"]
 
@@ -129,7 +143,9 @@ class TwinCore:
         self._lock = threading.Lock()
         s = self.settings
         self._S = s.sample_ns
-        self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s) for k, spec in INPUTS.items()}
+        self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s, self._stamp_guard())
+                          for k, spec in INPUTS.items()}
+        self._sources = {k: SourceTracker(switch_after_ns=int(s.stale_timeout_s * NS)) for k in INPUTS}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
@@ -156,14 +172,21 @@ class TwinCore:
         self._last_tick: TickResult | None = None
 
     # ------------------------------------------------------------------ inputs
-    def add_message(self, kind: str, msg: Any, receive_ns: int) -> bool:
+    def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None) -> bool:
         """Add a decoded input message (see :func:`~gerotor_twin.twin.inputs.sample_from_message`).
+
+        ``sequence`` is the publisher's publication sequence number (message
+        info of the subscription, or the MCAP message sequence; None / 0 =
+        unknown): with more than one publisher on the topic, only the followed
+        source is used (:mod:`gerotor_twin.twin.sources`).
 
         Returns
         -------
         bool
-            True if accepted; False if rejected (counted and reported).
+            True if accepted; False if rejected (counted and reported) or from another source.
         """
+        if sequence is not None and not self._from_followed_source(kind, sequence, int(receive_ns)):
+            return False
         try:
             value, stamp = sample_from_message(kind, msg)
         except InputError as exc:
@@ -192,7 +215,8 @@ class TwinCore:
         value : float
             The value in that unit.
         stamp_ns : int or None
-            Header stamp [ns] (``None``: unstamped, no order check).
+            Header stamp [ns] (``None``: unstamped, no order check; ``0``: a zero
+            header stamp, counted and reported, then as unstamped).
         receive_ns : int
             Clock time of reception [ns] (same clock as :meth:`tick`).
 
@@ -206,26 +230,70 @@ class TwinCore:
         receive_ns = int(receive_ns)
         with self._lock:
             ch = self._channels[kind]
-            restarts = ch.stamp_restarts
-            reason = ch.check_stamp(stamp_ns, int(round(self.settings.stamp_restart_s * NS)))
-            if reason is not None:
-                what = "equal to" if reason == "duplicate_stamp" else "older than"
-                err = InputError(f"{kind}.header.stamp", stamp_ns,
-                                 f"newer than the last accepted stamp {ch.last_stamp} ns",
-                                 f"{what} it: sample dropped")
-                self._reject(ch, reason, str(err), receive_ns)
+            if stamp_ns == 0:
+                self._zero_stamp(ch, receive_ns)
+                stamp_ns = None
+            verdict = ch.check_stamp(stamp_ns, receive_ns)
+            if verdict not in (None, RESTART, REBASE):
+                self._reject(ch, verdict, self._stamp_error(ch, verdict, stamp_ns, receive_ns), receive_ns)
                 return False
             try:
                 value = self._validate(kind, value, ch)
             except _Rejected as rej:
                 self._reject(ch, rej.reason, rej.text, receive_ns)
                 return False
-            if ch.stamp_restarts != restarts:
-                self._report(kind, "stamp_restart", 1,
-                             f"{kind}: header stamp went back by more than {self.settings.stamp_restart_s:g} s; "
-                             "taken as a restart of the source", receive_ns)
-            ch.add(value, stamp_ns, receive_ns)
+            if verdict is not None:
+                self._report(kind, "stamp_" + verdict, 1, self._stamp_note(kind, verdict), receive_ns)
+            ch.add(value, stamp_ns, receive_ns, verdict)
         return True
+
+    def _from_followed_source(self, kind: str, sequence: int, receive_ns: int) -> bool:
+        if kind not in INPUTS:
+            raise InputError("input", kind, " | ".join(INPUTS))
+        with self._lock:
+            tr = self._sources[kind]
+            switches = tr.switches
+            use = tr.observe(sequence, receive_ns)
+            if tr.switches != switches:
+                self._report(kind, "source_switch", 1, f"{kind}: the followed source went silent; now following "
+                             f"source #{tr.followed}", receive_ns)
+            if not use:
+                self._report(kind, "other_source", 1, f"{kind}: more than one publisher on the topic; following "
+                             f"source #{tr.followed}, samples of the others are logged but not used", receive_ns)
+        return use
+
+    # ---------------------------------------------------------- stamp checks
+    def _stamp_guard(self) -> StampGuard:
+        s = self.settings
+        return StampGuard(restart_ns=int(round(s.stamp_restart_s * NS)), ahead_ns=int(round(s.stamp_ahead_s * NS)),
+                          rebase_after=s.stamp_rebase_samples)
+
+    def _zero_stamp(self, ch: InputChannel, receive_ns: int) -> None:
+        """A header stamp of 0: counted, reported, the sample taken as unstamped (no order check)."""
+        ch.zero_stamps += 1
+        self._report(ch.spec.kind, "zero_stamp", 1, f"{ch.spec.kind}: header stamp 0 (the source does not stamp "
+                     "its messages): taken as unstamped, its order cannot be checked", receive_ns)
+
+    def _stamp_error(self, ch: InputChannel, reason: str, stamp_ns: int, receive_ns: int) -> str:
+        kind = ch.spec.kind
+        if reason == "future_stamp":
+            usual = ch.guard.usual_offset(receive_ns) or 0.0
+            return str(InputError(f"{kind}.header.stamp", stamp_ns,
+                                  f"at most {self.settings.stamp_ahead_s:g} s ahead of its receive time "
+                                  f"{receive_ns} ns (+ the usual offset {usual / NS:.6g} s)",
+                                  f"{(stamp_ns - receive_ns - usual) / NS:.6g} s ahead: implausible, this "
+                                  "sample alone dropped"))
+        what = "equal to" if reason == "duplicate_stamp" else "older than"
+        return str(InputError(f"{kind}.header.stamp", stamp_ns,
+                              f"newer than the last accepted stamp {ch.last_stamp} ns", f"{what} it: sample dropped"))
+
+    def _stamp_note(self, kind: str, verdict: str) -> str:
+        if verdict == RESTART:
+            return (f"{kind}: header stamp went back by more than {self.settings.stamp_restart_s:g} s; "
+                    "taken as a restart of the source")
+        return (f"{kind}: {self.settings.stamp_rebase_samples} consecutive consistent samples after stamp "
+                "rejections: stamp order re-anchored on them (the earlier stamp was the outlier, or the "
+                "source clock jumped)")
 
     def _validate(self, kind: str, value: float, ch: InputChannel) -> float:
         try:
@@ -539,8 +607,16 @@ class TwinCore:
                 out[k] = {"value": None if last is None else last[0],
                           "age_s": None if last is None else (now_ns - last[1]) / NS,
                           "accepted": ch.accepted, "clamped": ch.clamped, "rejected": dict(ch.rejected),
-                          "stamp_restarts": ch.stamp_restarts, "last_error": ch.last_error}
+                          "stamp_restarts": ch.stamp_restarts, "stamp_rebases": ch.stamp_rebases,
+                          "zero_stamps": ch.zero_stamps, "last_error": ch.last_error,
+                          **self._source_report(k, now_ns)}
         return out
+
+    def _source_report(self, kind: str, now_ns: int) -> dict[str, Any]:
+        tr = self._sources[kind]
+        return {"sources_active": tr.active(now_ns), "sources_seen": tr.sources_seen,
+                "followed_source": tr.followed, "other_source_samples": tr.other_samples,
+                "source_switches": tr.switches}
 
     def snapshot(self, now_ns: int) -> dict[str, Any]:
         """Plain figures of the twin (what :meth:`diagnostics` reports)."""
@@ -589,6 +665,7 @@ class TwinCore:
         counts["skips"] = snap["skips"]
         for k, info in snap["inputs"].items():
             counts[f"rejected.{k}"] = sum(info["rejected"].values())
+            counts[f"zero_stamps.{k}"] = info["zero_stamps"]
         prev = self._win["counts"]
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}

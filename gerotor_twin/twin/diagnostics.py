@@ -69,7 +69,8 @@ def model_status(snap: dict, delta: dict[str, int]) -> dict:
 def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | None = None) -> dict:
     """Status of the bench inputs: per input value, age, counters, last error.
 
-    ``delta["rejected.<kind>"]``: rejections since the previous report (WARN if any).
+    ``delta["rejected.<kind>"]``: rejections since the previous report (WARN if any);
+    ``delta["zero_stamps.<kind>"]``: header stamps of 0 since then (WARN, named in the message).
     """
     delta = delta or {}
     level, problems = m.DIAG_OK, []
@@ -83,6 +84,10 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
         for reason, n in info["rejected"].items():
             values[f"{kind}.rejected.{reason}"] = n
         values[f"{kind}.stamp_restarts"] = info["stamp_restarts"]
+        values[f"{kind}.stamp_rebases"] = info.get("stamp_rebases", 0)
+        values[f"{kind}.zero_stamps"] = info.get("zero_stamps", 0)
+        for key in ("sources_active", "sources_seen", "followed_source", "other_source_samples", "source_switches"):
+            values[f"{kind}.{key}"] = _fmt(info.get(key))
         values[f"{kind}.last_error"] = info["last_error"]
         if kind in REQUIRED and (age is None or age > stale_timeout_s):
             level = max(level, m.DIAG_STALE if age is None else m.DIAG_WARN)
@@ -91,6 +96,17 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
             level = max(level, m.DIAG_WARN)
     bad = [f"{k}: {delta[f'rejected.{k}']} rejected ({i['last_error']})" for k, i in snap["inputs"].items()
            if delta.get(f"rejected.{k}", 0)]
+    zero = [f"{k}: {delta[f'zero_stamps.{k}']} header stamps = 0 (unstamped: order not checked)"
+            for k in snap["inputs"] if delta.get(f"zero_stamps.{k}", 0)]
+    if zero:
+        level = max(level, m.DIAG_WARN)
+    bad += zero
+    many = [f"{k}: {i['sources_active']} sources publishing (following source #{i['followed_source']}; "
+            f"{i['other_source_samples']} samples of the others logged, not used)"
+            for k, i in snap["inputs"].items() if (i.get("sources_active") or 0) > 1]
+    if many:
+        level = max(level, m.DIAG_WARN)
+    bad += many
     msg = "; ".join(problems + bad) or "ok"
     return m.diagnostic_status(min(level, m.DIAG_STALE), INPUT_STATUS_NAME, msg, hardware_id="gerotor_twin",
                                values=values)

@@ -11,10 +11,11 @@ kind                   message (DESIGN.md)             value                  re
 =====================  ==============================  =====================  ========
 
 A message is turned into ``(value, stamp_ns)`` by :func:`sample_from_message`
-(``stamp_ns`` is the header stamp, ``None`` if the message has no header or a
-zero stamp).  :class:`InputChannel` keeps the accepted samples of one input on
-the sample grid (one entry per grid cell, the last one received in it), the
-stamp order and the counters.
+(``stamp_ns`` is the header stamp: ``None`` if the message has no header,
+``0`` for a zero stamp, which the core counts and treats as unstamped).
+:class:`InputChannel` keeps the accepted samples of one input on the sample
+grid (one entry per grid cell, the last one received in it), the stamp checks
+(a :class:`~gerotor_twin.twin.stamps.StampGuard`) and the counters.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ from typing import Any, Mapping
 
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import messages as m
+from gerotor_twin.twin.stamps import StampGuard
 
 __all__ = ["InputSpec", "INPUTS", "REQUIRED", "sample_from_message", "InputChannel", "REASONS"]
 
@@ -52,7 +54,8 @@ INPUTS: dict[str, InputSpec] = {s.kind: s for s in (
 REQUIRED = tuple(k for k, s in INPUTS.items() if s.required)
 
 #: Reasons a sample is rejected (keys of the per-input counters).
-REASONS = ("malformed", "nonfinite", "negative", "out_of_range", "duplicate_stamp", "out_of_order_stamp")
+REASONS = ("malformed", "nonfinite", "negative", "out_of_range", "duplicate_stamp", "out_of_order_stamp",
+           "future_stamp")
 
 
 def _get(msg: Any, name: str) -> Any:
@@ -77,7 +80,7 @@ def sample_from_message(kind: str, msg: Any) -> tuple[float, int | None]:
     value : float
         In the unit of the input (may be NaN: validation is the channel's job).
     stamp_ns : int or None
-        Header stamp [ns]; ``None`` for Float64 or a zero stamp.
+        Header stamp [ns]; ``None`` for Float64 (no header), ``0`` for a zero stamp.
 
     Raises
     ------
@@ -100,7 +103,7 @@ def sample_from_message(kind: str, msg: Any) -> tuple[float, int | None]:
             value = _get(msg, "fluid_pressure")
         stamp = None
         if kind != "delivery_flow":
-            stamp = m.ns_from_stamp(_get(_get(msg, "header"), "stamp")) or None
+            stamp = m.ns_from_stamp(_get(_get(msg, "header"), "stamp"))
     except (KeyError, AttributeError, TypeError) as exc:
         raise InputError(f"{kind}", type(msg).__name__, f"a {INPUTS[kind].msgtype}",
                          f"{type(exc).__name__}: {exc}") from None
@@ -117,44 +120,57 @@ class InputChannel:
     Not thread-safe by itself; :class:`~gerotor_twin.twin.core.TwinCore` locks.
     """
 
-    def __init__(self, spec: InputSpec, sample_ns: int, tau_s: float):
+    def __init__(self, spec: InputSpec, sample_ns: int, tau_s: float, guard: StampGuard | None = None):
         self.spec = spec
+        self.guard = guard or StampGuard(restart_ns=1_000_000_000, ahead_ns=500_000_000)
         self._sample_ns = sample_ns
         self._tau = tau_s
         self.cells: collections.deque[tuple[int, int, float, float]] = collections.deque()
         #: (grid cell index from which it applies, receive ns, filtered value, raw value)
-        self.last_stamp: int | None = None
         self.last_receive: int | None = None
         self.accepted = 0
         self.clamped = 0
         self.rejected = dict.fromkeys(REASONS, 0)
-        self.stamp_restarts = 0
+        self.zero_stamps = 0
         self.last_error: str = ""
 
     @property
     def rejected_total(self) -> int:
         return sum(self.rejected.values())
 
+    @property
+    def last_stamp(self) -> int | None:
+        """Last accepted header stamp [ns]; setting None forgets the stamp order and offset."""
+        return self.guard.last_stamp
+
+    @last_stamp.setter
+    def last_stamp(self, value: int | None) -> None:
+        if value is None:
+            self.guard.reset()
+        else:
+            self.guard.last_stamp = value
+
+    @property
+    def stamp_restarts(self) -> int:
+        return self.guard.restarts
+
+    @property
+    def stamp_rebases(self) -> int:
+        return self.guard.rebases
+
     def clear(self) -> None:
         """Forget samples and stamp order (clock jump back); counters are kept."""
         self.cells.clear()
-        self.last_stamp = None
+        self.guard.reset()
         self.last_receive = None
 
-    def check_stamp(self, stamp_ns: int | None, restart_ns: int) -> str | None:
-        """``None`` if the stamp is in order, else the rejection reason; a restart resets the order."""
-        if stamp_ns is None or self.last_stamp is None:
+    def check_stamp(self, stamp_ns: int | None, receive_ns: int) -> str | None:
+        """Verdict of :meth:`StampGuard.check` (``None`` for an unstamped sample: no check)."""
+        if stamp_ns is None:
             return None
-        if stamp_ns == self.last_stamp:
-            return "duplicate_stamp"
-        if stamp_ns < self.last_stamp:
-            if self.last_stamp - stamp_ns > restart_ns:
-                self.stamp_restarts += 1
-                return None
-            return "out_of_order_stamp"
-        return None
+        return self.guard.check(stamp_ns, receive_ns)
 
-    def add(self, value: float, stamp_ns: int | None, receive_ns: int) -> None:
+    def add(self, value: float, stamp_ns: int | None, receive_ns: int, verdict: str | None = None) -> None:
         """Store an accepted sample (filtered) in the cell where it starts to apply."""
         if self.last_receive is not None and receive_ns < self.last_receive:
             self.cells.clear()         # receive clock went back: old samples belong to another timeline
@@ -170,7 +186,7 @@ class InputChannel:
         if len(self.cells) > 1_000_000:                    # bounded memory whatever the backlog
             self.cells.popleft()
         if stamp_ns is not None:
-            self.last_stamp = stamp_ns
+            self.guard.accept(stamp_ns, receive_ns, verdict)
         self.last_receive = receive_ns
         self.accepted += 1
 
@@ -198,4 +214,4 @@ class InputChannel:
             self.cells.pop()
         if not self.cells:
             self.last_receive = None
-            self.last_stamp = None
+            self.guard.reset()

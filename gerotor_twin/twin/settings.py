@@ -49,6 +49,16 @@ class TwinSettings:
         is taken as a restart of the source (accepted, reported); a smaller step
         back, or an equal stamp, is rejected as out-of-order / duplicate.
         Default 1 s.
+    stamp_ahead_s : float
+        A header stamp ahead of its receive time by more than this beyond the
+        stream's usual offset is implausible: that sample alone is rejected
+        (``future_stamp``), the stream goes on [s].  Under ``use_sim_time`` it
+        must exceed the ``/clock`` step in bag time.  Default 0.5 s.
+    stamp_rebase_samples : int
+        After this many consecutive samples rejected for their stamp (out of
+        order or ahead) that agree with each other, the stamp order re-anchors
+        on them: one bad stamp blocks at most this many minus one good samples.
+        Default 3.
     negative_speed_tolerance_rad_s : float
         Shaft speeds in ``[-tol, 0)`` (sensor noise at standstill) are clamped to
         0; below ``-tol`` they are rejected [rad/s].  Default 0.5 rad/s.
@@ -69,6 +79,8 @@ class TwinSettings:
     stale_timeout_s: float = 0.5
     filter_tau_s: float = 0.0
     stamp_restart_s: float = 1.0
+    stamp_ahead_s: float = 0.5
+    stamp_rebase_samples: int = 3
     negative_speed_tolerance_rad_s: float = 0.5
     waveform_every: int = 1
     waveform_samples: int = 360
@@ -86,9 +98,11 @@ class TwinSettings:
         check_range("stale_timeout_s", self.stale_timeout_s, 0.0, 3600.0, lo_open=True, unit="s")
         check_range("filter_tau_s", self.filter_tau_s, 0.0, 60.0, unit="s")
         check_range("stamp_restart_s", self.stamp_restart_s, 0.0, 3600.0, unit="s")
+        check_range("stamp_ahead_s", self.stamp_ahead_s, 0.0, 3600.0, lo_open=True, unit="s")
         check_range("negative_speed_tolerance_rad_s", self.negative_speed_tolerance_rad_s, 0.0, 100.0,
                     unit="rad/s")
-        for name, lo, hi in (("waveform_every", 0, 10_000), ("waveform_samples", 8, 100_000)):
+        for name, lo, hi in (("waveform_every", 0, 10_000), ("waveform_samples", 8, 100_000),
+                             ("stamp_rebase_samples", 1, 1000)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise InputError(name, v, f"an integer in [{lo}, {hi}]")
