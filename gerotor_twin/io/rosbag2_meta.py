@@ -39,6 +39,8 @@ from typing import Iterable
 
 import yaml
 
+from gerotor_twin.yaml_safe import load_yaml
+
 __all__ = ["ROSBAG2_METADATA", "ROS_DISTRO", "BAG_METADATA_VERSION", "TopicCount", "rosbag2_record"]
 
 #: Metadata record name and its key, as in rosbag2_storage_mcap.
@@ -105,7 +107,7 @@ def rosbag2_record(file_name: str, topics: Iterable[TopicCount], first_ns: int |
         "message_count": count,
         "topics_with_message_count": [
             {"topic_metadata": {"name": t.name, "type": t.msgtype, "serialization_format": "cdr",
-                                "offered_qos_profiles": yaml.safe_load(t.qos_yaml) or [],
+                                "offered_qos_profiles": load_yaml(t.qos_yaml, "offered_qos_profiles") or [],
                                 "type_description_hash": t.type_hash},
              "message_count": t.count} for t in topics],
         "compression_format": "",
