@@ -154,11 +154,11 @@ def test_viscosity_and_leakage_scaling():
 
 
 def test_walther_kernel_matches_method():
-    """BEHAVIOUR: the numba kernel and the method agree; the kernel is compiled (has py_func)."""
+    """BEHAVIOUR: the numba kernel, its pure-Python function and the method agree."""
     oil = OilProperties.iso_vg(68)
     a, b = oil.walther_constants
     assert walther_kinematic_viscosity(330.0, a, b) == oil.kinematic_viscosity(330.0)
-    assert walther_kinematic_viscosity.py_func(330.0, a, b) == pytest.approx(
+    assert getattr(walther_kinematic_viscosity, 'py_func', walther_kinematic_viscosity)(330.0, a, b) == pytest.approx(
         oil.kinematic_viscosity(330.0), rel=1e-14)
 
 

@@ -237,11 +237,11 @@ def mixture_bulk_modulus(p, beta_l, alpha0, n, p_vap, p0):
         w_g = 1.0 / (1.0 + e)
         w_l = e / (1.0 + e)
     q = n * d
-    den = w_l * q + w_g * beta_l
-    beta = q * beta_l / den
-    r_l = beta / beta_l
-    r_g = beta_l / den          # β/q
-    return beta, w_l * r_l * r_l + w_g * (1.0 + n) * r_g * r_g - 1.0
+    u = q / beta_l
+    den = w_l * u + w_g         # > 0: w_l + w_g = 1, u > 0
+    r_l = u / den               # β/β_L, with w_l·r_l ≤ 1
+    r_g = 1.0 / den             # β/q,   with w_g·r_g ≤ 1
+    return q * r_g, (w_l * r_l) * r_l + (w_g * r_g) * (1.0 + n) * r_g - 1.0
 
 
 @njit
