@@ -3,7 +3,8 @@
 Viscosity from two data-sheet points through the ASTM D341 (Walther) chart
 equation [1], density from the density at 15 °C and the thermal expansion
 coefficient with the volume-correction form of ASTM D1250 / API MPMS 11.1 [2],
-and the liquid's bulk modulus falling exponentially with temperature [3], [4].
+and the liquid's bulk modulus falling linearly with temperature, the zero-pressure
+limit of the Tait equation of state used for mineral oils [3], [4].
 Temperatures are in kelvin inside; °C, cSt only at the edges
 (:mod:`gerotor_twin.units`).
 
@@ -34,11 +35,17 @@ References
    oils): volume correction factor VCF = exp(−α₁₅ΔT(1 + 0.8 α₁₅ΔT)),
    α₁₅ = K₀/ρ₁₅² + K₁/ρ₁₅ with K₀ = 0, K₁ = 0.6278 kg/(m³·K).
 .. [3] H. Gholizadeh, R. Burton, G. Schoenau, "Fluid bulk modulus: a literature
-   survey", Int. J. Fluid Power 12(3), 2011, pp. 5–15 (bulk modulus falls with
-   temperature and rises with pressure; definitions; Hayward's estimates).
-.. [4] O. L. Anderson, "Derivation of Wachtman's equation for the temperature
-   dependence of elastic moduli of oxide compounds", Phys. Rev. 144, 1966
-   (Anderson–Grüneisen parameter δ_T = −(∂ ln K/∂T)_p / α ≈ K′ = ∂K/∂p).
+   survey", Int. J. Fluid Power 12(3), 2011, pp. 5–15 (isothermal tangent vs
+   secant bulk modulus; it falls with temperature and rises with pressure;
+   Tait-type equations of state for hydraulic oils).
+.. [4] Maha Fluid Power Research Center (Purdue University), FSTI gap-flow
+   code, fluid model ``HLP32_oil`` (file ``oil.cpp``, public copy in
+   github.com/mitgandhi/PRJ_FSTI): Tait equation
+   ρ = ρ_T/(1 − a₁ ln((a₂ + a₃T + p)/(a₂ + a₃T))), ρ_T = ρ_s(1 − α_s T),
+   ρ_s = 1047.03 kg/m³, α_s = 5.761668e-4 1/K, a₁ = 0.0732965,
+   a₂ = 1965.02 bar, a₃ = −2.96813 bar/K (T in K); its tangent bulk modulus at
+   p = 0 is β_L = (a₂ + a₃T)/a₁, linear in T; viscosity
+   μ = 1.702e-2·exp(5.428(50 − ϑ)/(94.72 + ϑ)) Pa·s at p = 0 (ϑ in °C).
 .. [5] Shell Tellus S2 M technical data sheet, "Typical physical
    characteristics" (ISO VG 32 / 46 / 68: ν at 0, 40, 100 °C; density at 15 °C).
 """
@@ -227,8 +234,8 @@ class OilProperties:
     bulk_modulus_temperature_k : float
         Temperature of ``bulk_modulus_ref_pa`` [K]. Default 313.15.
     bulk_modulus_temp_coeff_per_k : float
-        k_β = −d ln β_L/dT [1/K]. Default 6.5e-3 (Anderson–Grüneisen
-        δ_T ≈ K′ ≈ 10 times α ≈ 6.5e-4 1/K at 40 °C, [3], [4]).
+        k_β = −(dβ_L/dT)/β_ref [1/K]. Default 2.866e-3: the HLP32 Tait model of
+        [4], −a₃/(a₂ + a₃·313.15 K).  Must keep β_L ≥ 0.1 β_ref up to 473.15 K.
     name : str
         Label (e.g. ``"ISO VG46"``).
 
@@ -251,18 +258,20 @@ class OilProperties:
         \rho(T) = \rho_{15}\exp\left(-\alpha_{15}\Delta T\,(1 + 0.8\,\alpha_{15}\Delta T)\right),
         \quad \Delta T = T - 288.15\ \mathrm{K}
 
-    Bulk modulus of the liquid [3], [4]:
+    Bulk modulus of the liquid (isothermal tangent, p → 0) [3], [4]:
 
     .. math::
-        \beta_L(T) = \beta_{ref}\, e^{-k_\beta (T - T_{ref})}
+        \beta_L(T) = \beta_{ref}\,\left(1 - k_\beta (T - T_{ref})\right)
 
     Validity: T in [233.15, 473.15] K (−40…200 °C); D341 holds for
     ν ≥ 0.21 mm²/s and for mineral oils without VI improver shear effects
     (Newtonian); its typical interpolation error between the two points is
     ~1 % and grows on extrapolation.  Pressure effects on μ (Barus) and on
-    β_L (β rises ~ K′·p, i.e. +4 % at 60 bar) are not included.  The default
-    k_β is an estimate (6.5e-3 1/K: β_L from 1.5 GPa at 40 °C to 1.16 GPa at
-    80 °C); set it from a measurement when one exists.
+    β_L (the Tait model of [4] gives +2.7 % at 30 bar, 40 °C) are not included.  The
+    default k_β (β_L −11.5 % from 40 to 80 °C) is one mineral HLP oil's; two
+    other published fits in [4] (Mobil DTE 10 Excel 32, MIL-PRF-87257) fall
+    by 4.6e-3 and 3.5e-3 1/K (relative, 25–80 °C): set k_β from a
+    measurement of the bench oil when one exists.
     """
 
     viscosity_temperature_a_k: float = 313.15
@@ -273,7 +282,7 @@ class OilProperties:
     expansion_15_per_k: float | None = None
     bulk_modulus_ref_pa: float = 1.5e9
     bulk_modulus_temperature_k: float = 313.15
-    bulk_modulus_temp_coeff_per_k: float = 6.5e-3
+    bulk_modulus_temp_coeff_per_k: float = 2.866e-3
     name: str = "ISO VG46"
 
     def __post_init__(self) -> None:
@@ -305,9 +314,11 @@ class OilProperties:
                                               0.0, 2e-3, unit="1/K"))
         put("bulk_modulus_ref_pa", check_range("oil.bulk_modulus_ref_pa", self.bulk_modulus_ref_pa,
                                                1e8, 1e10, unit="Pa"))
+        k_max = 0.9 / (T_MAX_K - self.bulk_modulus_temperature_k) \
+            if self.bulk_modulus_temperature_k < T_MAX_K else 0.05
         put("bulk_modulus_temp_coeff_per_k",
             check_range("oil.bulk_modulus_temp_coeff_per_k", self.bulk_modulus_temp_coeff_per_k,
-                        0.0, 0.05, unit="1/K"))
+                        0.0, min(k_max, 0.05), unit="1/K"))
         a, b = walther_fit(ta, m2_s_to_cst(self.kinematic_viscosity_a_m2_s),
                            tb, m2_s_to_cst(self.kinematic_viscosity_b_m2_s))
         put("_walther_a", a)
@@ -378,4 +389,4 @@ class OilProperties:
     def bulk_modulus(self, t_k: float) -> float:
         """Isothermal bulk modulus of the air-free liquid β_L(T) [Pa], T [K]."""
         dt = self._temperature(t_k) - self.bulk_modulus_temperature_k
-        return self.bulk_modulus_ref_pa * math.exp(-self.bulk_modulus_temp_coeff_per_k * dt)
+        return self.bulk_modulus_ref_pa * (1.0 - self.bulk_modulus_temp_coeff_per_k * dt)
