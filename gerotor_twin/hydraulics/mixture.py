@@ -125,6 +125,7 @@ S_CLIP = 400.0
 FLOOR_LOG_GAP = -690.0
 _NEWTON_MAX = 100
 _NEWTON_TOL = 1e-14   # on x = ln(p − p_vap): relative tolerance on p − p_vap
+_F_TOL = 1e-10        # |ln V − ln V*| needed as well (guards against a stalled step)
 
 
 @njit(inline="always")
@@ -142,6 +143,14 @@ def _log_sum(a, b):
     if a > b:
         return a + math.log1p(math.exp(b - a))
     return b + math.log1p(math.exp(a - b))
+
+
+@njit(inline="always")
+def _log1mexp(e):
+    """ln(1 − e^e) for e < 0, accurate at both ends (Mächler's log1mexp)."""
+    if e > -0.6931471805599453:
+        return math.log(-math.expm1(e))
+    return math.log1p(-math.exp(e))
 
 
 @njit(inline="always")
@@ -257,20 +266,22 @@ def _newton_step(x, s, ln_l, ln_g, beta_l, alpha0, n, p_vap, p0):
     undefined (V* below one term), which the caller replaces by bisection.
     """
     d = math.exp(x)
-    if math.exp(ln_g) * beta_l >= math.exp(ln_l) * n * d:       # gas-controlled
-        e = ln_l + s                                              # ln(V_L/V*)
-        if e >= 0.0:
-            return math.inf
-        r = math.exp(e) / -math.expm1(e)                          # V_L/(V* − V_L)
-        phi = math.log(p0 - p_vap) + n * (math.log(alpha0) + s - math.log1p(-math.exp(e)))
+    e = ln_l + s                                                  # ln(V_L/V*)
+    om = -math.expm1(e) if e < 0.0 else 0.0                       # 1 − V_L/V*
+    # gas form if the bubbles set the compressibility and V* − V_L is not lost
+    # to cancellation (at x_lo of a liquid-rich state V_L = V* exactly)
+    if om > 1e-8 and math.exp(ln_g) * beta_l >= math.exp(ln_l) * n * d:
+        r = math.exp(e) / om                                      # V_L/(V* − V_L)
+        phi = math.log(p0 - p_vap) + n * (math.log(alpha0) + s - _log1mexp(e))
         dphi = -n * d / beta_l * r
         return x - (x - phi) / (1.0 - dphi)
     e = ln_g + s                                                  # ln(V_G/V*)
-    if e >= 0.0:
+    om = -math.expm1(e) if e < 0.0 else 0.0                       # 1 − V_G/V*
+    if om <= 0.0:
         return math.inf
-    q = math.exp(e) / -math.expm1(e)                              # V_G/(V* − V_G)
+    q = math.exp(e) / om                                          # V_G/(V* − V_G)
     p = p_vap + d
-    psi = p0 - beta_l * (-s + math.log1p(-math.exp(e)) - math.log1p(-alpha0))
+    psi = p0 - beta_l * (-s + _log1mexp(e) - math.log1p(-alpha0))
     dpsi = -beta_l / (n * d) * q
     d_new = p - (p - psi) / (1.0 - dpsi) - p_vap
     return math.log(d_new) if d_new > 0.0 else math.inf
@@ -338,7 +349,7 @@ def mixture_pressure(s, beta_l, alpha0, n, p_vap, p0):
         else:
             x_hi = x
         x_new = _newton_step(x, s, ln_l, ln_g, beta_l, alpha0, n, p_vap, p0)
-        if abs(x_new - x) <= _NEWTON_TOL * max(1.0, abs(x)):
+        if abs(x_new - x) <= _NEWTON_TOL * max(1.0, abs(x)) and abs(f) < _F_TOL:
             x = x_new             # converged (a step this small may land on the bracket)
             break
         if not (x_lo < x_new < x_hi):
