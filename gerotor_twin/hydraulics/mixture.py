@@ -1,7 +1,7 @@
 r"""Barotropic mixture of oil, free (entrained) air and vapour: ρ(p), β(p), p(s).
 
-Replaces the step of Eq. (23) of the paper by a physical model with the same
-interface as :mod:`gerotor_twin.hydraulics.fluid`: the state of every volume
+Replaces the step of Eq. (23) of the paper by a physical model in the same
+role as :mod:`gerotor_twin.hydraulics.fluid`: the state of every volume
 stays s = ln(ρ/ρ_ref) of the MIXTURE (mass balance exact), and s(p), β(p) =
 dp/ds are closed forms; p(s) is a safeguarded Newton iteration on the closed
 form (vectorised builder for the kernel's Hermite tables).
@@ -13,8 +13,10 @@ The model (per unit mixture volume at the reference pressure p₀):
 * free air in small bubbles, polytropic with index n, sharing each bubble with
   saturated vapour (Dalton: p = p_gas + p_vap, surface tension neglected):
   V_G = α₀ ((p₀ − p_vap)/(p − p_vap))^{1/n};
-* the vapour's mass is neglected (its density at p_vap is ~10⁻⁵ of the
-  oil's), so the mixture mass is that of oil + air and ρ ∝ 1/(V_L + V_G).
+* the vapour's mass is neglected (at 2 kPa an oil vapour of M ≈ 300 g/mol has
+  ρ_v ≈ 0.2 kg/m³, ~3·10⁻⁴ of the oil's: negligible while cavities hold less than
+  a few % of the volume), so the mixture mass is that of oil + air and
+  ρ ∝ 1/(V_L + V_G).
 
 Hence, with ρ_ref the mixture density at p₀,
 
