@@ -55,7 +55,7 @@ import math
 from dataclasses import dataclass
 
 from gerotor_twin._jit import njit
-from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.errors import InputError, check_finite, check_range
 from gerotor_twin.units import celsius_to_kelvin, cst_to_m2_s, m2_s_to_cst
 
 __all__ = [
@@ -339,7 +339,6 @@ class OilProperties:
         **kwargs
             Other :class:`OilProperties` fields (SI).
         """
-        from gerotor_twin.errors import check_finite
         return cls(viscosity_temperature_a_k=celsius_to_kelvin(check_finite("oil.t_a_c", t_a_c)),
                    kinematic_viscosity_a_m2_s=cst_to_m2_s(check_finite("oil.nu_a_cst", nu_a_cst)),
                    viscosity_temperature_b_k=celsius_to_kelvin(check_finite("oil.t_b_c", t_b_c)),
