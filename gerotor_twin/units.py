@@ -32,3 +32,26 @@ def pa_abs_to_bar_gauge(pa: float, p_atm: float = P_ATM) -> float:
 def m3s_to_lpm(q: float) -> float:
     """Flow [m^3/s] -> [L/min]."""
     return q * 60000.0
+
+
+ZERO_CELSIUS_K = 273.15  #: 0 °C in kelvin [K]
+
+
+def celsius_to_kelvin(t_c: float) -> float:
+    """Temperature [°C] -> [K]."""
+    return t_c + ZERO_CELSIUS_K
+
+
+def kelvin_to_celsius(t_k: float) -> float:
+    """Temperature [K] -> [°C]."""
+    return t_k - ZERO_CELSIUS_K
+
+
+def cst_to_m2_s(nu_cst: float) -> float:
+    """Kinematic viscosity [cSt] = [mm²/s] -> [m²/s]."""
+    return nu_cst * 1e-6
+
+
+def m2_s_to_cst(nu: float) -> float:
+    """Kinematic viscosity [m²/s] -> [cSt] = [mm²/s]."""
+    return nu * 1e6
