@@ -31,7 +31,7 @@ import numpy as np
 from .._jit import njit
 from .fluid import Fluid, bulk_modulus, log_density
 
-__all__ = ["StateEquation", "state_equation", "pressure_of", "log_density_of", "bulk_modulus_of",
+__all__ = ["StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
            "BAND_NODES"]
 
 BAND_NODES = 1024   #: nodes of the Hermite table of p(s) inside the switch band
@@ -96,6 +96,15 @@ def pressure_of(s, eos):
     t3 = t2 * t
     return ((2.0 * t3 - 3.0 * t2 + 1.0) * eos.band_p[i] + (t3 - 2.0 * t2 + t) * ds * eos.band_dp[i]
             + (3.0 * t2 - 2.0 * t3) * eos.band_p[i + 1] + (t3 - t2) * ds * eos.band_dp[i + 1])
+
+
+@njit(inline="always")
+def state_of(s, eos):
+    """(p [Pa], β [Pa]) of log-density s: :func:`pressure_of` and β(p) in one call (β = β* in the liquid)."""
+    if s >= eos.s_hi:
+        return eos.p_hi + (s - eos.s_hi) * eos.beta_liquid, eos.beta_liquid
+    p = pressure_of(s, eos)
+    return p, bulk_modulus_of(p, eos)
 
 
 @njit

@@ -33,7 +33,7 @@ from .._jit import njit
 from ..geometry.tables import AD, AS, DV, KREL, V, VR
 from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import orifice_flow
-from ..hydraulics.state_equation import bulk_modulus_of, pressure_of
+from ..hydraulics.state_equation import bulk_modulus_of, state_of
 from .contact import column, locate
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY)
@@ -65,10 +65,10 @@ def volume_states(y, km, op, ws):
         if i == n and not km.pc.restriction:
             s = op.s_d                                   # imposed delivery pressure
             ws.p[i] = op.p_d
+            ws.beta[i] = bulk_modulus_of(op.p_d, km.eos)
         else:
             s = y[i]
-            ws.p[i] = pressure_of(s, km.eos)
-        ws.beta[i] = bulk_modulus_of(ws.p[i], km.eos)
+            ws.p[i], ws.beta[i] = state_of(s, km.eos)
         ws.rho[i] = math.exp(s)
         ws.acc[i] = 0.0
 
@@ -163,16 +163,17 @@ def assemble(km, op, ws, f, jac, want_jac):
     n = km.pc.n
     n1 = n + 1
     for j in range(n):
-        vol = ws.geo[j, G_V]
-        f[j] = (ws.acc[j] - op.omega * ws.geo[j, G_DV]) / vol
+        inv = 1.0 / ws.geo[j, G_V]
+        f[j] = (ws.acc[j] - op.omega * ws.geo[j, G_DV]) * inv
         if want_jac:
             for k in range(n1):
-                jac[j, k] /= vol
+                jac[j, k] *= inv
     if km.pc.restriction:
-        f[n] = ws.acc[n] / km.pc.line_volume
+        inv = 1.0 / km.pc.line_volume
+        f[n] = ws.acc[n] * inv
         if want_jac:
             for k in range(n1):
-                jac[n, k] /= km.pc.line_volume
+                jac[n, k] *= inv
     else:
         # imposed delivery pressure: y_N is not a state but the quadrature ∫ Q_delivered dt [m³],
         # integrated by the same Rosenbrock stages as the chambers (nothing depends on it)
