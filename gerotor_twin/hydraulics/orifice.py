@@ -152,7 +152,7 @@ def orifice_flow(dp, area, cd_max, lambda_crit, rho, mu):
     adp = abs(dp)
     d_h = math.sqrt(4.0 * area / math.pi)
     a = 2.0 * d_h * r / (m * lc)          # = 2 D_h / (ν λ_crit)  [s/m]
-    v = math.sqrt(2.0 / r) * math.sqrt(adp)  # ideal jet velocity [m/s]
+    v = math.sqrt(2.0 * adp / r)           # ideal jet velocity [m/s]
     z = a * v                              # = 2 λ / λ_crit [-]
     em = math.expm1(-2.0 * z)              # z ≥ 0: no overflow; one call gives tanh and sech²
     e = 1.0 + em

@@ -120,7 +120,7 @@ def _pull_back(cmat, h, ex, ey):
 
 
 @njit
-def contact(tab, n, delta, theta, ex, ey, h_out, cmat):
+def contact(tab, n, delta, theta, ex, ey, h_out, cmat, reuse=False):
     """Overlap check of sec. 3.7 of [1] on the tabulated gap expansion.
 
     Parameters
@@ -137,7 +137,10 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat):
     h_out : ndarray (N,)
         Receives the N gap heights [m] (≥ 0).
     cmat : ndarray (N, 9)
-        Scratch: the expansion coefficients of every lobe.
+        The expansion coefficients of every lobe at θ (filled here).
+    reuse : bool
+        ``cmat`` already holds the coefficients at this θ (a second call at the
+        same angle with another displacement): they are not interpolated again.
 
     Returns
     -------
@@ -149,7 +152,8 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat):
         Index of the lobe in contact (smallest gap).
     """
     for k in range(n):
-        gap_coefficients(tab, theta, k, cmat[k])
+        if not reuse:
+            gap_coefficients(tab, theta, k, cmat[k])
         h_out[k] = gap_value(cmat[k], delta, ex, ey, 0.0)
     gamma = 0.0
     if np.min(h_out) >= 0.0:

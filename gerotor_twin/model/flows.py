@@ -58,6 +58,14 @@ def chamber_geometry(theta, tab, n, geo):
 
 
 @njit(inline="always")
+def _exp_small(s):
+    """e^s: a Taylor polynomial for |s| < 0.01 (relative error < 2e-15), exp otherwise."""
+    if -0.01 < s < 0.01:
+        return 1.0 + s * (1.0 + s * 0.5 * (1.0 + s / 3.0 * (1.0 + 0.25 * s * (1.0 + 0.2 * s))))
+    return math.exp(s)
+
+
+@njit(inline="always")
 def volume_states(y, km, op, ws):
     """Pressure [Pa], bulk modulus [Pa] and ρ/ρ₀ of every volume from the log-densities."""
     n = km.pc.n
@@ -69,7 +77,7 @@ def volume_states(y, km, op, ws):
         else:
             s = y[i]
             ws.p[i], ws.beta[i] = state_of(s, km.eos)
-        ws.rho[i] = math.exp(s)
+        ws.rho[i] = _exp_small(s)
         ws.acc[i] = 0.0
 
 

@@ -244,7 +244,7 @@ def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
     counters[C_CONTACT_UNLOADED] += unl
     d1x, d1y = velocity(ex, ey, fx, fy, omega2, bparams)
     px, py, _g, kc2 = contact(km.tab, pc.n, pc.tip_clearance, theta, ex + h * d1x, ey + h * d1y, ws.gaps1,
-                              ws.cmat)
+                              ws.cmat, True)      # ws.cmat holds θ's coefficients (pressure_step)
     fx2, fy2, _fc2, _unl2 = outer_gear_load(ws.pres, theta, omega, px, py, kc2, km)
     d2x, d2y = velocity(px, py, fx2, fy2, omega2, bparams)
     ex += 0.5 * h * (d1x + d2x)
@@ -313,7 +313,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
         elif move == MOVE_FIXED:
             fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
         ex0, ey0 = ex, ey
-        ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
+        ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, True)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
         _first_stage(y, theta, km, op, ws, integrals)   # end-of-step flows (recorded) = next first stage
