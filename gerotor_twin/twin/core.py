@@ -81,6 +81,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
+from gerotor_twin.twin.sequence import SequenceGaps
 from gerotor_twin.twin.settings import NS, TwinSettings
 
 __all__ = ["TwinCore", "TickResult"]
@@ -130,6 +131,7 @@ class TwinCore:
         s = self.settings
         self._S = s.sample_ns
         self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s) for k, spec in INPUTS.items()}
+        self._gaps = {k: SequenceGaps() for k in INPUTS}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
@@ -173,6 +175,32 @@ class TwinCore:
                 self._reject(self._channels[kind], "malformed", str(exc), int(receive_ns))
             return False
         return self.add_sample(kind, value, stamp, receive_ns)
+
+    def note_sequence(self, kind: str, seq: int | None, receive_ns: int) -> int:
+        """Book the publisher sequence number of a received ``kind`` message (any thread).
+
+        Call it once per message received, before or after :meth:`add_message`;
+        gaps are counted as ``lost`` (see :mod:`gerotor_twin.twin.sequence`).
+
+        Returns
+        -------
+        int
+            Messages this number shows lost before reception (usually 0).
+        """
+        if kind not in INPUTS:
+            raise InputError("input", kind, " | ".join(INPUTS))
+        with self._lock:
+            gap = self._gaps[kind].add(seq, int(receive_ns))
+            if gap:
+                self._report(kind, "lost", 1, f"{kind}: {gap} message(s) lost before reception (gap in the "
+                             "publisher's sequence numbers; input_queue_depth too small or the node stalled?)",
+                             int(receive_ns))
+        return gap
+
+    def input_accounting(self) -> dict[str, dict[str, int]]:
+        """Per input: received, lost, missed_at_start, ... (:class:`~gerotor_twin.twin.sequence.GapCounts`)."""
+        with self._lock:
+            return {k: g.counts().as_dict() for k, g in self._gaps.items()}
 
     def reject(self, kind: str, text: str, receive_ns: int, reason: str = "malformed") -> None:
         """Count and report a message of ``kind`` that could not even be decoded."""
@@ -539,7 +567,8 @@ class TwinCore:
                 out[k] = {"value": None if last is None else last[0],
                           "age_s": None if last is None else (now_ns - last[1]) / NS,
                           "accepted": ch.accepted, "clamped": ch.clamped, "rejected": dict(ch.rejected),
-                          "stamp_restarts": ch.stamp_restarts, "last_error": ch.last_error}
+                          "stamp_restarts": ch.stamp_restarts, "last_error": ch.last_error,
+                          "lost": self._gaps[k].lost, "missed_at_start": self._gaps[k].missed_at_start}
         return out
 
     def snapshot(self, now_ns: int) -> dict[str, Any]:
@@ -589,6 +618,7 @@ class TwinCore:
         counts["skips"] = snap["skips"]
         for k, info in snap["inputs"].items():
             counts[f"rejected.{k}"] = sum(info["rejected"].values())
+            counts[f"lost.{k}"] = info["lost"]
         prev = self._win["counts"]
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}
