@@ -98,3 +98,16 @@ def test_bad_settings_refused():
         SequenceGaps(relink_window=0)
     with pytest.raises(ValueError, match="idle_s"):
         SequenceGaps(idle_s=0.0)
+
+
+def test_accounting_metadata_adds_up():
+    """Behaviour: the MCAP record states received, logged (minus writer drops), lost per input."""
+    from gerotor_twin.twin.sequence import accounting_metadata
+    g = SequenceGaps()
+    feed(g, [1, 2, 3, 6, 7])
+    meta = accounting_metadata({"shaft_speed": g.counts().as_dict()},
+                               {"shaft_speed": {"accepted": 4, "rejected": {"nonfinite": 1}}},
+                               {"/bench/shaft_speed": 1, "/twin/x": 9}, {"shaft_speed": "/bench/shaft_speed"}, 0)
+    assert meta["shaft_speed.received"] == "5" and meta["shaft_speed.logged"] == "4"
+    assert meta["shaft_speed.lost"] == "2" and meta["shaft_speed.rejected"] == "1"
+    assert all(isinstance(v, str) for v in meta.values())

@@ -45,7 +45,8 @@ PARAMETERS: tuple[Param, ...] = (
           "std_msgs/Float64 measured delivery flow [m^3/s] (optional, for live residuals; '' = off)"),
     Param("oil_temperature_topic", "bench/oil_temperature",
           "sensor_msgs/Temperature oil temperature [degC] (optional, reported only; '' = off)"),
-    Param("input_queue_depth", 100, "subscription history depth (sensor-data QoS) [messages]", 1, 100000),
+    Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
+                                     "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
     Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",
           0.0, 60.0),
     Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),

@@ -31,7 +31,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["SequenceGaps", "GapCounts"]
+__all__ = ["SequenceGaps", "GapCounts", "ACCOUNTING_METADATA", "accounting_metadata"]
+
+#: Name of the MCAP Metadata record with the per-input accounting, written by the node at close.
+ACCOUNTING_METADATA = "gerotor_twin.input_accounting"
 
 
 @dataclass(frozen=True)
@@ -166,3 +169,42 @@ class SequenceGaps:
         """Current counters."""
         return GapCounts(self.received, self.lost, self.missed_at_start, self.duplicates, self.unnumbered,
                          sum(1 for r in self._runs if r.succ is None), self.streams_started)
+
+
+def accounting_metadata(gaps: dict, report: dict, log_dropped: dict, topics: dict,
+                        model_dropped: int = 0) -> dict[str, str]:
+    """The :data:`ACCOUNTING_METADATA` record: per subscribed input, what was received, logged, lost.
+
+    Parameters
+    ----------
+    gaps : dict
+        ``TwinCore.input_accounting()`` (kind -> :meth:`GapCounts.as_dict`).
+    report : dict
+        ``TwinCore.input_report()`` (kind -> accepted, rejected by reason, ...).
+    log_dropped : dict
+        MCAP writer drops per topic (``LogStats.dropped_queue_full``).
+    topics : dict
+        kind -> fully qualified topic of the subscribed inputs.
+    model_dropped : int
+        Inputs logged but not handed to the model (inbox overflow).
+
+    Returns
+    -------
+    dict[str, str]
+        Keys ``<kind>.<counter>``: ``topic``, ``received``, ``logged`` (received -
+        dropped by the MCAP writer), ``lost`` (before reception), ``missed_at_start``,
+        ``duplicates``, ``unnumbered``, ``accepted``, ``rejected``; plus
+        ``model_inbox_dropped``.  In the file: published = logged + log_dropped
+        + lost (+ missed_at_start before the first sample of each publisher).
+    """
+    out = {"model_inbox_dropped": str(model_dropped)}
+    for kind, topic in topics.items():
+        g = gaps[kind]
+        dropped = int(log_dropped.get(topic, 0))
+        rep = report.get(kind, {})
+        vals = {"topic": topic, "received": g["received"], "logged": g["received"] - dropped,
+                "log_dropped": dropped, "lost": g["lost"], "missed_at_start": g["missed_at_start"],
+                "duplicates": g["duplicates"], "unnumbered": g["unnumbered"],
+                "accepted": rep.get("accepted", 0), "rejected": sum(rep.get("rejected", {}).values())}
+        out.update({f"{kind}.{k}": str(v) for k, v in vals.items()})
+    return out
