@@ -66,7 +66,9 @@ def reference_flow():
     return run_steady(PumpModel(load_config(), "mobility"), 2000, 20).mean_delivery_flow_m3s
 
 
-def test_node_predicts_offline_flow_and_sigterm_keeps_every_input(tmp_path, reference_flow):
+def test_node_predicts_offline_flow_and_sigterm_accounts_every_input(tmp_path, reference_flow):
+    """Behaviour (+ literature: offline steady model): mean flow, bounds, and every best-effort input
+    sent (warm-up, 2.5 s at 200 Hz, SIGTERM after) is either logged or counted lost by the node."""
     from gerotor_twin.config import load_config
     from rosbags.highlevel import AnyReader
     c = load_config().clearances.housing_radial_m

@@ -245,10 +245,9 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
         c0, t0, w0, th0 = _cpu_s(proc.pid), time.monotonic(), time.time_ns(), _thread_cpu_s(proc.pid)
         with peer.lock:
             n0 = len(peer.diags)
-        wait_line(pub, pub_out, "done", seconds + 60)
+        wait_line(pub, pub_out, "published", seconds + 60)
         c1, t1, w1, th1 = _cpu_s(proc.pid), time.monotonic(), time.time_ns(), _thread_cpu_s(proc.pid)
-        pub.wait(30)
-        time.sleep(1.2)                               # last diagnostics, outputs after the last input
+        pub.wait(60)                                  # lingers 1 s: last diagnostics, outputs after the last input
         with peer.lock:
             window = [v for (tt, v) in peer.diags[n0:] if tt <= t1 + 1.05]
             outputs = list(peer.outputs)

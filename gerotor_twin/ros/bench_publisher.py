@@ -9,7 +9,8 @@ Waits until both topics have a subscriber, then ``--settle`` seconds more (so
 discovery has completed both ways), prints ``publishing`` and publishes
 ``bench/shaft_speed`` (sensor_msgs/JointState) and ``bench/delivery_pressure``
 (sensor_msgs/FluidPressure, absolute) with best-effort sensor QoS on an
-absolute schedule (no drift).  Each pair carries the publish time (wall clock,
+absolute schedule (no drift), prints ``published``, stays ``--linger`` s, writes
+``--out`` and prints ``done``.  Each pair carries the publish time (wall clock,
 ns) as header stamp.  At the end it writes ``--out`` (JSON): ``published``
 (per input, the DDS writer numbers its samples 1..n), ``stamps`` (publish
 times [ns], one per pair), ``late`` (periods started more than one period late).
@@ -32,10 +33,14 @@ def _parse(argv):
     ap.add_argument("--rpm", type=float, default=3000.0, help="shaft speed [rpm]")
     ap.add_argument("--bar", type=float, default=27.5, help="delivery pressure, gauge [bar]")
     ap.add_argument("--settle", type=float, default=1.0, help="wait after the subscriptions matched [s]")
+    ap.add_argument("--linger", type=float, default=1.0,
+                    help="stay matched after the last message [s] (a writer that leaves at once may take "
+                         "its undelivered samples with it)")
     ap.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (default: environment)")
     ap.add_argument("--out", required=True, help="JSON file written at the end")
     a = ap.parse_args(argv)
-    for name, lo, hi in (("rate", 1.0, 20000.0), ("seconds", 0.0, 86400.0), ("settle", 0.0, 60.0)):
+    for name, lo, hi in (("rate", 1.0, 20000.0), ("seconds", 0.0, 86400.0), ("settle", 0.0, 60.0),
+                         ("linger", 0.0, 60.0)):
         v = getattr(a, name)
         if not (lo <= v <= hi and math.isfinite(v)):
             ap.error(f"--{name} = {v!r}; allowed: [{lo:g}, {hi:g}]")
@@ -84,10 +89,12 @@ def main(argv=None) -> int:
             pub_p.publish(encode(m.FLUID_PRESSURE, m.fluid_pressure(t, pd)))
             stamps.append(t)
             t_next += period
-        print("done", flush=True)
+        print("published", flush=True)
+        time.sleep(a.linger)
         with open(a.out, "w") as fh:
             json.dump({"published": {"shaft_speed": n, "delivery_pressure": n}, "stamps": stamps, "late": late,
                        "rate_hz": a.rate, "rpm": a.rpm, "bar": a.bar}, fh)
+        print("done", flush=True)
     finally:
         node.destroy_node()
         rclpy.try_shutdown(context=ctx)

@@ -117,6 +117,7 @@ class TwinNode(Node):
             raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, "events | single | multi")
         self.received = dict.fromkeys(INPUTS, 0)
         self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
+        self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
         if os.environ.get("GEROTOR_TWIN_SWITCH_INTERVAL_S"):
             sys.setswitchinterval(float(os.environ["GEROTOR_TWIN_SWITCH_INTERVAL_S"]))
         self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
@@ -144,8 +145,8 @@ class TwinNode(Node):
             if not topic:
                 continue
             cb = self._input_cb(kind, spec.msgtype)
-            if self.executor_kind == "events":   # Jazzy's EventsExecutor passes no message info
-                cb = functools.partial(lambda c, data: c(data, None), cb)
+            if self.executor_kind == "events":   # Jazzy's EventsExecutor passes no message info:
+                cb = functools.partial(lambda c, data: c(data, None), cb)     # losses cannot be counted
             sub = self.input_node.create_subscription(_msg_class(spec.msgtype), topic, cb, sensor_qos,
                                            callback_group=self._in_group, raw=True)
             self.subs[kind] = sub
@@ -274,7 +275,7 @@ class TwinNode(Node):
             recv = self.inbox.put(kind, data)          # decoded and added to the core by the model thread
             self.received[kind] += 1
             info = info if isinstance(info, dict) else {}
-            seq = info.get("publication_sequence_number")
+            seq = info.get("publication_sequence_number") if self.count_losses else None
             log = self.log
             if log is not None:
                 topic = topic or self.subs[kind].topic_name
@@ -350,6 +351,7 @@ class TwinNode(Node):
                   "last_callback_error": self.last_callback_error,
                   "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"],
                   "executor": self.executor_kind, "model_thread": self.model_thread_on,
+                  "input_losses_counted": self.count_losses,
                   "model_inbox_dropped": self.inbox.dropped}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
