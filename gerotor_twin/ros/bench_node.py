@@ -20,6 +20,7 @@ Figures (printed, never asserted), per speed
     lost              counted lost by the node (MCAP metadata ``gerotor_twin.input_accounting``:
                       sequence gaps + missed at start + MCAP writer drops)
     unaccounted       published - logged - lost (must be 0)
+    skips             lag-policy skips in the window (0 = the model kept up with the clock)
 """
 from __future__ import annotations
 
@@ -298,12 +299,12 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
                 f"per speed, {busy} busy process(es), executor {result['executor']}, "
                 f"model thread {'on' if result['model_thread'] else 'off'})")
             out(f"  {'rpm':>5s} {'node CPU':>9s} {'core RTF':>9s} {'node RTF':>9s} {'lat p50':>8s} {'lat p99':>8s} "
-                f"{'published':>10s} {'logged':>8s} {'lost':>6s} {'unacc.':>7s}")
+                f"{'skips':>5s} {'published':>10s} {'logged':>8s} {'lost':>6s} {'unacc.':>7s}")
             for rpm in rpms:
                 r = _one_speed(tmp, model, params, peer, rpm, bar, rate, seconds, settle)
                 result["rows"].append(r)
                 out(f"  {rpm:5g} {100 * r['node_cpu_fraction']:8.0f}% {r['core_rtf']:9.2f} {r['node_rtf']:9.2f} "
-                    f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['published']:10d} "
+                    f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['skips'] or 0:5d} {r['published']:10d} "
                     f"{r['logged']:8d} {r['lost']:6d} {r['unaccounted']:7d}   "
                     + " ".join(f"{k} {100 * v:.0f}%" for k, v in r["thread_cpu_fraction"].items()))
         finally:

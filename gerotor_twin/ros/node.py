@@ -86,8 +86,6 @@ class TwinNode(Node):
     """The digital-twin node; see the module docstring."""
 
     def __init__(self, **kwargs):
-        if os.environ.get("GEROTOR_TWIN_PARAM_SERVICES") == "0":
-            kwargs.setdefault("start_parameter_services", False)
         super().__init__("twin_node", **kwargs)
         from gerotor_twin.config import default_config_path, load_config
         from gerotor_twin.model.pump import Inputs, PumpModel
@@ -111,22 +109,7 @@ class TwinNode(Node):
         self.callback_errors = 0
         self.last_callback_error = ""
         self.log = None
-        self.model_thread_on = os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0"
-        self.executor_kind = os.environ.get("GEROTOR_TWIN_EXECUTOR", "single")
-        if self.executor_kind not in ("events", "single", "multi"):
-            raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, "events | single | multi")
-        self.received = dict.fromkeys(INPUTS, 0)
-        self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
-        self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
-        if os.environ.get("GEROTOR_TWIN_SWITCH_INTERVAL_S"):
-            sys.setswitchinterval(float(os.environ["GEROTOR_TWIN_SWITCH_INTERVAL_S"]))
-        self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
-        self._tick_ns = max(1, int(round(1e9 / prm["tick_rate_hz"])))
-        self._diag_ns = max(1, int(round(1e9 / prm["diagnostics_rate_hz"])))
-        self._next_diag: int | None = None
-        self._wake = threading.Event()
-        self._step_lock = threading.Lock()       # one step at a time (model thread vs shutdown)
-        self.model_thread = None
+        self._init_threads(prm)
 
         sensor_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=prm["input_queue_depth"],
                                 reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
@@ -147,13 +130,14 @@ class TwinNode(Node):
             cb = self._input_cb(kind, spec.msgtype)
             if self.executor_kind == "events":   # Jazzy's EventsExecutor passes no message info:
                 cb = functools.partial(lambda c, data: c(data, None), cb)     # losses cannot be counted
+            group = self._in_group if self.input_node is self else None   # (input node: its default group)
             sub = self.input_node.create_subscription(_msg_class(spec.msgtype), topic, cb, sensor_qos,
-                                           callback_group=self._in_group, raw=True)
+                                                      callback_group=group, raw=True)
             self.subs[kind] = sub
         self._open_log()
         self.tick_timer = self._start_ticking()
         self.startup_s = time.monotonic() - _T_START
-        self._diagnostics(self.inbox.take()[0])  # a first /diagnostics right away: "ready"
+        self._diagnostics(self.get_clock().now().nanoseconds)   # a first /diagnostics right away: "ready"
         if self.model_thread is not None:
             self.model_thread.start()
         self.get_logger().info(
@@ -196,6 +180,24 @@ class TwinNode(Node):
                 log.add_topic(self.fq[t], mt, qos="reliable")
         log.add_topic(self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, qos="reliable")
         self.log = log
+
+    def _init_threads(self, prm) -> None:
+        """Inbox, tick grid and the measurement switches (environment; docs/node.md)."""
+        self.model_thread_on = os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0"
+        self.executor_kind = os.environ.get("GEROTOR_TWIN_EXECUTOR", "single")
+        if self.executor_kind not in ("events", "single", "multi"):
+            raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, "events | single | multi")
+        self.received = dict.fromkeys(INPUTS, 0)
+        self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
+        self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
+        self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
+        self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
+        self._tick_ns = max(1, int(round(1e9 / prm["tick_rate_hz"])))
+        self._diag_ns = max(1, int(round(1e9 / prm["diagnostics_rate_hz"])))
+        self._next_diag: int | None = None
+        self._wake = threading.Event()
+        self._step_lock = threading.Lock()       # one step at a time (model thread vs shutdown)
+        self.model_thread = None
 
     def _make_input_node(self) -> Node:
         """The node that holds the input subscriptions: ``<name>_inputs``, without services.
@@ -280,8 +282,12 @@ class TwinNode(Node):
             if log is not None:
                 topic = topic or self.subs[kind].topic_name
                 src = info.get("source_timestamp")
-                log.write_raw(topic, data, recv, src or recv,
-                              sequence=seq if isinstance(seq, int) and 0 <= seq < 2**32 else None)
+                try:
+                    log.write_raw(topic, data, recv, src or recv,
+                                  sequence=seq if isinstance(seq, int) and 0 <= seq < 2**32 else None)
+                except Exception as exc:  # noqa: BLE001 - counted as not logged; reception goes on
+                    self.log_refused[kind] += 1
+                    self._callback_error(exc)
             self.core.note_sequence(kind, seq, recv)
 
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
@@ -367,13 +373,21 @@ class TwinNode(Node):
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
 
     # -------------------------------------------------------------- shutdown
+    def _log_drops(self, log) -> dict[str, int]:
+        """Inputs received but not logged, per topic: writer queue full or refused by ``write_raw``."""
+        out = dict(log.stats().dropped_queue_full)
+        for kind, n in self.log_refused.items():
+            if n and kind in self.subs:
+                out[self.subs[kind].topic_name] = out.get(self.subs[kind].topic_name, 0) + n
+        return out
+
     def close_log(self) -> None:
         """Drain and finalise the MCAP log (idempotent, signal-safe)."""
         log = self.log
         if log is not None:
             if not log.closed:
                 log.add_metadata(ACCOUNTING_METADATA, accounting_metadata(
-                    self.core.input_accounting(), self.core.input_report(0), log.stats().dropped_queue_full,
+                    self.core.input_accounting(), self.core.input_report(0), self._log_drops(log),
                     {k: s.topic_name for k, s in self.subs.items()}, self.inbox.dropped))
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
