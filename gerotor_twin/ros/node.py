@@ -122,12 +122,13 @@ class TwinNode(Node):
                                                              out_qos)
         self.fq = {t: p.topic_name for t, p in self.pubs.items()}     # fully qualified (remapped) names
         self.subs = {}
+        self.input_callbacks = {}
         self.input_node = self._make_input_node()
         for kind, spec in INPUTS.items():
             topic = prm[f"{kind}_topic"]
             if not topic:
                 continue
-            cb = self._input_cb(kind, spec.msgtype)
+            cb = self.input_callbacks[kind] = self._input_cb(kind, spec.msgtype)
             if self.executor_kind == "events":   # Jazzy's EventsExecutor passes no message info:
                 cb = functools.partial(lambda c, data: c(data, None), cb)     # losses cannot be counted
             group = self._in_group if self.input_node is self else None   # (input node: its default group)
@@ -184,9 +185,11 @@ class TwinNode(Node):
     def _init_threads(self, prm) -> None:
         """Inbox, tick grid and the measurement switches (environment; docs/node.md)."""
         self.model_thread_on = os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0"
-        self.executor_kind = os.environ.get("GEROTOR_TWIN_EXECUTOR", "single")
-        if self.executor_kind not in ("events", "single", "multi"):
-            raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, "events | single | multi")
+        self.executor_kind = os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset")
+        if self.executor_kind not in _EXECUTORS:
+            raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, " | ".join(_EXECUTORS))
+        if self.executor_kind == "waitset" and os.environ.get("GEROTOR_TWIN_INPUT_NODE") == "0":
+            raise InputError("GEROTOR_TWIN_INPUT_NODE", "0", "1 with GEROTOR_TWIN_EXECUTOR=waitset")
         self.received = dict.fromkeys(INPUTS, 0)
         self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
         self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
@@ -293,7 +296,7 @@ class TwinNode(Node):
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
             try:
                 cb(data, info)
-                if self.drain_batch > 1:
+                if self.drain_batch > 1 and self.executor_kind != "waitset":   # (waitset: the receiver does)
                     self._drain_subscription(kind, cb)
             except Exception as exc:  # noqa: BLE001 - the node must keep running
                 self._callback_error(exc)
@@ -435,16 +438,31 @@ def _drain_inputs(node: TwinNode, executor, idle_s: float = 0.2, max_s: float = 
             break
 
 
-def _executor(kind: str):
-    """rclpy executor by name (docs/node.md compares them): single (default), events, multi."""
+_EXECUTORS = ("waitset", "single", "events", "multi")
+
+
+def _executor(node: TwinNode):
+    """The receiving loop over the input node (docs/node.md compares them).
+
+    ``waitset`` (default): :class:`~gerotor_twin.ros.receiver.InputReceiver`;
+    ``single`` / ``multi`` / ``events``: rclpy's executors.
+    """
+    kind = node.executor_kind
+    if kind == "waitset":
+        from gerotor_twin.ros.receiver import InputReceiver
+        return InputReceiver(node.context, node.subs, node.input_callbacks, node.drain_batch)
+    ex = _rclpy_executor(kind)
+    ex.add_node(node.input_node)
+    return ex
+
+
+def _rclpy_executor(kind: str):
     if kind == "events":
         from rclpy.experimental import EventsExecutor
         return EventsExecutor()
     if kind == "multi":
         return MultiThreadedExecutor(num_threads=2)
-    if kind == "single":
-        return SingleThreadedExecutor()
-    raise InputError("GEROTOR_TWIN_EXECUTOR", kind, "events | single | multi")
+    return SingleThreadedExecutor()
 
 
 def main(argv=None) -> int:
@@ -478,8 +496,7 @@ def main(argv=None) -> int:
                 print(f"error: {exc}", file=sys.stderr)
                 return 2
             raise
-        executor = _executor(node.executor_kind)
-        executor.add_node(node.input_node)
+        executor = _executor(node)
         main_spin = _spin_main_node(node, stop) if node.input_node is not node else None
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
