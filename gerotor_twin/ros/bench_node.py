@@ -281,7 +281,7 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
         rate: float = 1000.0, busy: int = 0, params: tuple = (), settle: float = 1.5, out=print) -> dict:
     """Measure and print; returns the figures as a dict."""
     result: dict = {"model": model, "rate_hz": rate, "busy": busy, "params": list(params),
-                    "executor": os.environ.get("GEROTOR_TWIN_EXECUTOR", "single"),
+                    "executor": os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset"),
                     "model_thread": os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0",
                     "startup_s": [], "rows": []}
     with tempfile.TemporaryDirectory() as td:

@@ -30,11 +30,11 @@ class Param:
 PARAMETERS: tuple[Param, ...] = (
     Param("pump_config", "", "pump YAML file (geometry, fluid, clearances); '' = the packaged config/pump.yaml"),
     Param("bearing_model", "mobility", "outer-gear model", choices=("mobility", "short", "fdm", "fixed")),
-    Param("tick_rate_hz", 100.0, "model tick rate on the node clock [Hz] (under use_sim_time at most one "
+    Param("tick_rate_hz", 200.0, "model tick rate on the node clock [Hz] (under use_sim_time at most one "
                                  "tick per /clock message)", 1.0, 1000.0),
     Param("sample_period_s", 0.005, "input sampling grid: zero-order hold cell and finest output step [s]",
           0.0005, 0.1),
-    Param("publish_rate_hz", 50.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
+    Param("publish_rate_hz", 200.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
     Param("shaft_speed_topic", "bench/shaft_speed", "sensor_msgs/JointState input, velocity[0] [rad/s]"),
