@@ -12,27 +12,31 @@ What it does
       CDR bytes are logged to MCAP untouched (receive time = node clock, publish
       time = source time), decoded with :mod:`gerotor_twin.twin.decode` and
       handed to the core with the node-clock receive time;
-    * ticks the core on a node-clock timer (``use_sim_time`` follows ``/clock``),
-      encodes every output once with the project codec, publishes those bytes
-      (reliable QoS) and logs the same bytes (``log_time`` = prediction time);
+    * ticks the core at the whole multiples of ``1/tick_rate_hz`` on the node
+      clock (``use_sim_time`` follows ``/clock``), encodes every output once with
+      the project codec, publishes those bytes (reliable QoS) and logs the same
+      bytes (``log_time`` = prediction time);
     * publishes ``/diagnostics`` (core statuses + MCAP log status) at
       ``diagnostics_rate_hz``, and once as soon as it is ready;
-    * two threads (see docs/node.md for the measurements behind this):
-      the executor thread only receives inputs -- stamps them with the node
-      clock, logs the raw bytes, books their publisher sequence numbers (gaps =
-      inputs lost before reception, counted per input) and hands them over
-      through a lock held for microseconds (:class:`~gerotor_twin.twin.inbox.Inbox`);
-      the model thread decodes them into the core, ticks it at the whole
-      multiples of the tick period on the node clock (under ``use_sim_time`` on
-      a ``/clock``-driven timer), publishes and logs the outputs and
-      ``/diagnostics``.  The numba kernels release the GIL, so reception runs
-      beside the model advance.  ``GEROTOR_TWIN_MODEL_THREAD=0`` ticks on the
-      executor instead; ``GEROTOR_TWIN_EXECUTOR=single|events|multi`` picks
-      rclpy's executor (default ``single``; Jazzy's EventsExecutor gives raw
-      callbacks no message info, so input losses cannot be counted with it);
-    * SIGINT / SIGTERM: stop spinning, close the MCAP log (drained and
-      finalised), exit 0.  Any exception escaping a callback is logged and
-      counted; the log is closed in a ``finally`` and at interpreter exit.
+    * threads (docs/node.md has the measurements behind this): the receiving
+      thread (:class:`~gerotor_twin.ros.receiver.InputReceiver`, one rcl wait set
+      on the input subscriptions of the service-free node ``<name>_inputs``)
+      only receives inputs -- stamps them with the node clock, logs the raw
+      bytes, books their publisher sequence numbers (gaps = inputs lost before
+      reception, counted per input) and hands them over through a lock held for
+      microseconds (:class:`~gerotor_twin.twin.inbox.Inbox`); the model thread
+      decodes them into the core, ticks it, publishes and logs the outputs and
+      ``/diagnostics``; a third thread spins this node (parameter services,
+      ``/clock``).  The numba kernels release the GIL, so reception runs beside
+      the model advance.  Measurement switches (environment):
+      ``GEROTOR_TWIN_MODEL_THREAD=0``, ``GEROTOR_TWIN_INPUT_NODE=0``,
+      ``GEROTOR_TWIN_EXECUTOR=waitset|single|events|multi`` (Jazzy's
+      EventsExecutor gives callbacks no message info: losses not countable);
+    * SIGINT / SIGTERM: stop the model, keep receiving and logging inputs until
+      none came for 0.2 s (at most 3 s), write ``gerotor_twin.input_accounting``,
+      close the MCAP log (drained and finalised), exit 0.  Any exception escaping
+      a callback is logged and counted; the log is closed in a ``finally`` and at
+      interpreter exit.
 """
 from __future__ import annotations
 
