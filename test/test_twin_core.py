@@ -301,3 +301,21 @@ def test_fast_multiarray_cdr_matches_codec(labels, shape):
     from gerotor_twin.twin.fastcdr import encode_float64_multiarray
     msg = m.float64_multiarray(np.random.default_rng(0).random(shape), labels)
     assert encode_float64_multiarray(msg) == encode(m.FLOAT64_MULTIARRAY, msg)
+
+
+def test_lost_inputs_counted_and_status_warns(model):
+    """Behaviour: gaps in publisher sequence numbers are counted per input, WARN on /diagnostics."""
+    from gerotor_twin.twin.diagnostics import INPUT_STATUS_NAME
+    core = TwinCore(model, TwinSettings())
+    for k, seq in enumerate((1, 2, 3, 7, 8)):          # 4, 5, 6 never received
+        t = k * 1_000_000
+        core.note_sequence("shaft_speed", seq, t)
+        core.note_sequence("delivery_pressure", k + 1, t)
+        feed(core, t)
+    diag = core.diagnostics(10_000_000)
+    st = next(s for s in diag["status"] if s["name"] == INPUT_STATUS_NAME)
+    vals = {kv["key"]: kv["value"] for kv in st["values"]}
+    assert vals["shaft_speed.lost"] == "3" and vals["delivery_pressure.lost"] == "0"
+    assert st["level"] == m.DIAG_WARN and "shaft_speed: 3 lost" in st["message"]
+    assert core.input_accounting()["shaft_speed"]["received"] == 5
+    assert any("lost before reception" in text for _, text in core.pop_events())

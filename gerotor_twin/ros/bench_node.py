@@ -1,21 +1,30 @@
-"""``gerotor-twin bench node``: startup time and node-level real-time factor of ``twin_node``.
+"""``gerotor-twin bench node``: startup time, CPU, real-time factor, latency and input accounting of ``twin_node``.
 
 Starts the node as a subprocess on a private ``ROS_DOMAIN_ID`` (twice: the
 first start may fill JIT / table caches, the second is "warm"), measures the
-time from ``Popen`` to its ``ready`` log line, then feeds bench inputs at
-200 Hz at 1000 / 2000 / 3000 rpm (27.5 bar) and reads ``/diagnostics``.
+time from ``Popen`` to its ``ready`` log line.  Then, per speed, a fresh node
+and a bench publisher in a SEPARATE process (:mod:`gerotor_twin.ros.bench_publisher`,
+shaft speed + delivery pressure at ``rate`` Hz, default 1 kHz), optionally
+beside ``busy`` CPU-bound processes (a loaded bench PC).
 
-Figures (printed, never asserted)
-    startup_s         Popen -> "ready" (interpreter, imports, tables, JIT load, DDS)
-    core_rtf          simulated time / compute time inside the ticks (from /diagnostics)
-    node_rtf          simulated time / CPU time of the whole node process (all threads:
-                      decode, tick, encode, DDS, MCAP writer) over the window
-    skips             lag-policy skips in the window (0 = kept up)
+Figures (printed, never asserted), per speed
+    node CPU          CPU time of the node process (all threads) / wall time over the
+                      measurement window [% of one core]
+    core_rtf          simulated time / compute time inside the ticks (median of /diagnostics)
+    node_rtf          simulated time / CPU time of the whole node process
+    latency p50/p99   input publish time -> reception (in this process) of the first
+                      ``twin/eccentricity`` stamped at or after it (the instantaneous
+                      outputs of one instant share that stamp) [ms]
+    published         inputs sent by the publisher (both topics)
+    logged            of those, in the node's MCAP file (read back after the run)
+    lost              counted lost by the node (MCAP metadata ``gerotor_twin.input_accounting``:
+                      sequence gaps + missed at start + MCAP writer drops)
+    unaccounted       published - logged - lost (must be 0)
+    skips             lag-policy skips in the window (0 = the model kept up with the clock)
 """
 from __future__ import annotations
 
 import json
-import math
 import os
 import subprocess
 import sys
@@ -46,11 +55,28 @@ def _cpu_s(pid: int) -> float:
     return (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def _start(tmp: Path, model: str, log_name: str) -> tuple[subprocess.Popen, float, Path]:
+def _thread_cpu_s(pid: int) -> dict[str, float]:
+    """CPU time [s] of the node's threads by role: executor (main), model, dds, other (MCAP writer, ...)."""
+    out = {"executor": 0.0, "model": 0.0, "dds": 0.0, "other": 0.0}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            comm = (task / "comm").read_text().strip()
+            f = (task / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        role = ("executor" if task.name == str(pid) else "model" if comm == "twin-model"
+                else "dds" if comm.startswith("dds.") else "other")
+        out[role] += (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
+    return out
+
+
+def _start(tmp: Path, model: str, log_name: str, params: tuple = ()) -> tuple[subprocess.Popen, float, Path]:
     root = Path(__file__).resolve().parents[2]
     log = tmp / log_name
     args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
             str(root / "config" / "twin.yaml"), "-p", f"log_dir:={tmp}", "-p", f"bearing_model:={model}"]
+    for p in params:
+        args += ["-p", p]
     env = dict(os.environ, ROS_DOMAIN_ID=str(_domain()), PYTHONUNBUFFERED="1")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
     t0 = time.monotonic()
@@ -76,95 +102,214 @@ def _stop(proc: subprocess.Popen) -> None:
             proc.wait(10)
 
 
-def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, bar: float = 27.5,
-        out=print) -> dict:
-    """Measure and print; returns the figures as a dict."""
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from diagnostic_msgs.msg import DiagnosticArray
-    from sensor_msgs.msg import FluidPressure, JointState
+class _Peer:
+    """rclpy participant of this process: records /diagnostics and stamped outputs with receive times."""
 
-    from gerotor_twin.io import messages as m
-    from gerotor_twin.io.codec import encode
-    from gerotor_twin.twin.decode import decode
+    def __init__(self):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import Vector3Stamped
 
-    result: dict = {"model": model, "startup_s": [], "rows": []}
-    with tempfile.TemporaryDirectory() as td:
-        tmp = Path(td)
-        for k in range(2):
-            proc, t, _ = _start(tmp, model, f"start{k}.log")
-            _stop(proc)
-            result["startup_s"].append(t)
-        out(f"twin_node startup (Popen -> ready): first {result['startup_s'][0]:.2f} s, "
-            f"warm {result['startup_s'][1]:.2f} s")
+        from gerotor_twin.io import messages as m
+        from gerotor_twin.twin.decode import decode
 
-        proc, _, log = _start(tmp, model, "run.log")
-        ctx = rclpy.Context()
-        rclpy.init(context=ctx, domain_id=_domain())
-        node = rclpy.create_node("bench_node_peer", context=ctx)
-        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
-        pub_w = node.create_publisher(JointState, "bench/shaft_speed", qos)
-        pub_p = node.create_publisher(FluidPressure, "bench/delivery_pressure", qos)
-        diags: list = []
-        lock = threading.Lock()
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx, domain_id=_domain())
+        self.node = rclpy.create_node("bench_node_peer", context=self.ctx)
+        self.lock = threading.Lock()
+        self.diags: list = []
+        self.outputs: list = []
+        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
         def on_diag(data, _info):
             msg = decode(m.DIAGNOSTIC_ARRAY, data)
             vals = {kv.key: kv.value for st in msg.status if st.name == "gerotor_twin: model" for kv in st.values}
-            with lock:
-                diags.append((time.monotonic(), vals))
+            with self.lock:
+                self.diags.append((time.monotonic(), vals))
 
-        node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 10, raw=True)
-        ex = SingleThreadedExecutor(context=ctx)
-        ex.add_node(node)
-        spin = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.05) for _ in iter(ctx.ok, False)],
-                                daemon=True)
-        spin.start()
+        def on_output(data, _info):
+            recv = time.time_ns()
+            msg = decode(m.VECTOR3_STAMPED, data)
+            with self.lock:
+                self.outputs.append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, recv))
+
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, qos, raw=True)
+        self.node.create_subscription(Vector3Stamped, "twin/eccentricity", on_output, qos, raw=True)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
         try:
-            pd = 101325.0 + bar * 1e5
-            out(f"node-level real-time factor ({model}, {bar:g} bar, inputs at 200 Hz, {seconds:g} s per speed)")
-            out(f"  {'rpm':>5s} {'core RTF':>9s} {'node RTF':>9s} {'node CPU':>9s} {'skips':>6s} {'lag [s]':>8s}")
-            for rpm in rpms:
-                w = rpm * math.pi / 30
+            while self.ctx.ok():
+                self.ex.spin_once(timeout_sec=0.05)
+        except Exception:  # noqa: BLE001 - context shut down
+            pass
 
-                def feed(duration):
-                    t_end = time.monotonic() + duration
-                    while time.monotonic() < t_end:
-                        t = time.time_ns()
-                        pub_w.publish(encode(m.JOINT_STATE, m.joint_state(t, name=["shaft"], velocity=[w])))
-                        pub_p.publish(encode(m.FLUID_PRESSURE, m.fluid_pressure(t, pd)))
-                        time.sleep(0.005)
+    def reset(self):
+        with self.lock:
+            self.diags.clear()
+            self.outputs.clear()
 
-                feed(1.5)                                  # settle, diagnostics window boundary
-                with lock:
-                    n0 = len(diags)
-                c0, t0 = _cpu_s(proc.pid), time.monotonic()
-                feed(seconds)
-                c1, t1 = _cpu_s(proc.pid), time.monotonic()
-                time.sleep(1.1)
-                with lock:
-                    window = [v for (tt, v) in diags[n0:] if tt <= t1 + 1.05]
-                if len(window) < 2:
-                    out(f"  {rpm:5d}  (no diagnostics received)")
-                    continue
-                sim = float(window[-1]["simulated_s"]) - float(window[0]["simulated_s"])
-                skips = int(window[-1]["skips"]) - int(window[0]["skips"])
-                rtfs = [float(v["real_time_factor"]) for v in window[1:] if v["real_time_factor"] != "n/a"]
-                core_rtf = sorted(rtfs)[len(rtfs) // 2] if rtfs else float("nan")
-                cpu = c1 - c0
-                node_rtf = sim / cpu if cpu > 0 else float("nan")
-                row = {"rpm": rpm, "core_rtf": core_rtf, "node_rtf": node_rtf,
-                       "node_cpu_fraction": cpu / (t1 - t0), "skips": skips,
-                       "lag_s": float(window[-1]["lag_s"]) if window[-1]["lag_s"] != "n/a" else None}
-                result["rows"].append(row)
-                out(f"  {rpm:5d} {core_rtf:9.2f} {node_rtf:9.2f} {100 * row['node_cpu_fraction']:8.0f}% "
-                    f"{skips:6d} {row['lag_s'] if row['lag_s'] is not None else float('nan'):8.3f}")
-        finally:
+    def close(self):
+        import rclpy
+        self.ex.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.ctx)
+        self.thread.join(2.0)
+
+
+def start_busy(n: int) -> list[subprocess.Popen]:
+    """``n`` CPU-bound processes (a loaded machine); stop them with :func:`stop_busy`."""
+    return [subprocess.Popen([sys.executable, "-c", "while True: pass"], start_new_session=True)
+            for _ in range(n)]
+
+
+def stop_busy(procs: list[subprocess.Popen]) -> None:
+    for p in procs:
+        if p.poll() is None:
+            p.kill()
+            p.wait(10)
+
+
+def start_publisher(tmp: Path, rate: float, seconds: float, rpm: float, bar: float, settle: float,
+                    name: str, domain: int | None = None) -> tuple[subprocess.Popen, Path, Path]:
+    """The bench publisher process; returns (process, its stdout file, its JSON result file)."""
+    out, res = tmp / f"{name}.out", tmp / f"{name}.json"
+    args = [sys.executable, "-m", "gerotor_twin.ros.bench_publisher", "--rate", str(rate), "--seconds",
+            str(seconds), "--rpm", str(rpm), "--bar", str(bar), "--settle", str(settle), "--out", str(res)]
+    env = dict(os.environ, ROS_DOMAIN_ID=str(_domain() if domain is None else domain), PYTHONUNBUFFERED="1")
+    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+    proc = subprocess.Popen(args, stdout=open(out, "w"), stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    return proc, out, res
+
+
+def wait_line(proc: subprocess.Popen, path: Path, text: str, timeout: float) -> None:
+    t0 = time.monotonic()
+    while text not in path.read_text():
+        if proc.poll() is not None or time.monotonic() - t0 > timeout:
+            raise RuntimeError(f"bench publisher: no {text!r} ({path.read_text()[-1000:]})")
+        time.sleep(0.01)
+
+
+def input_accounting(files: list[Path], stamps: set[int]) -> dict:
+    """Read the node's MCAP file(s): inputs logged (by header stamp) and the node's accounting record."""
+    from gerotor_twin.io.reader import open_mcap
+    from gerotor_twin.twin.decode import decode
+    from gerotor_twin.twin.sequence import ACCOUNTING_METADATA
+    logged, acct = 0, {}
+    for f in files:
+        mf = open_mcap(f)
+        types = mf.topic_types()
+        for ch, msg in mf.iter_raw(["/bench/shaft_speed", "/bench/delivery_pressure"]):
+            st = decode(types[ch.topic], msg.data).header.stamp
+            logged += (st.sec * 1_000_000_000 + st.nanosec) in stamps
+        for k, v in mf.metadata.get(ACCOUNTING_METADATA, {}).items():
+            if k.split(".", 1)[-1] in ("lost", "missed_at_start", "log_dropped", "received"):
+                acct[k] = acct.get(k, 0) + int(v)
+    lost = sum(v for k, v in acct.items() if k.endswith((".lost", ".missed_at_start", ".log_dropped")))
+    return {"logged": logged, "lost": lost, "record": acct}
+
+
+def latency_ms(inputs_ns: list[int], outputs: list[tuple[int, int]]) -> tuple[float, float, int]:
+    """p50, p99 [ms] of (receive time of the first output stamped >= t) - t, and inputs without one."""
+    import bisect
+    outs = sorted(outputs)
+    stamps = [o[0] for o in outs]
+    lat, none = [], 0
+    for t in inputs_ns:
+        i = bisect.bisect_left(stamps, t)
+        if i == len(stamps):
+            none += 1
+            continue
+        lat.append((min(r for _, r in outs[i:i + 50]) - t) / 1e6)
+    if not lat:
+        return float("nan"), float("nan"), none
+    lat.sort()
+    return lat[len(lat) // 2], lat[min(len(lat) - 1, int(0.99 * len(lat)))], none
+
+
+def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, bar: float, rate: float,
+               seconds: float, settle: float) -> dict:
+    run_dir = tmp / f"rpm{rpm:g}"
+    run_dir.mkdir()
+    proc, _, _ = _start(run_dir, model, "node.log", params)
+    pub = None
+    try:
+        peer.reset()
+        pub, pub_out, pub_res = start_publisher(run_dir, rate, settle + seconds, rpm, bar, 1.0, "pub")
+        wait_line(pub, pub_out, "publishing", 90)
+        time.sleep(settle)
+        c0, t0, w0, th0 = _cpu_s(proc.pid), time.monotonic(), time.time_ns(), _thread_cpu_s(proc.pid)
+        with peer.lock:
+            n0 = len(peer.diags)
+        wait_line(pub, pub_out, "published", seconds + 60)
+        c1, t1, w1, th1 = _cpu_s(proc.pid), time.monotonic(), time.time_ns(), _thread_cpu_s(proc.pid)
+        pub.wait(60)                                  # lingers 1 s: last diagnostics, outputs after the last input
+        with peer.lock:
+            window = [v for (tt, v) in peer.diags[n0:] if tt <= t1 + 1.05]
+            outputs = list(peer.outputs)
+    finally:
+        if pub is not None and pub.poll() is None:
+            pub.kill()
+            pub.wait(10)
+        _stop(proc)
+    res = json.loads(pub_res.read_text())
+    stamps = res["stamps"]
+    acc = input_accounting(sorted(run_dir.glob("*.mcap")), set(stamps))
+    published = sum(res["published"].values())
+    p50, p99, _ = latency_ms([t for t in stamps if w0 <= t <= w1 - 600_000_000], outputs)
+    sim = rtfs = None
+    if len(window) >= 2:
+        sim = float(window[-1]["simulated_s"]) - float(window[0]["simulated_s"])
+        rtfs = sorted(float(v["real_time_factor"]) for v in window[1:] if v["real_time_factor"] != "n/a")
+    cpu = c1 - c0
+    return {"rpm": rpm, "node_cpu_fraction": cpu / (t1 - t0),
+            "core_rtf": rtfs[len(rtfs) // 2] if rtfs else float("nan"),
+            "node_rtf": sim / cpu if sim is not None and cpu > 0 else float("nan"),
+            "latency_p50_ms": p50, "latency_p99_ms": p99, "skips": int(window[-1]["skips"]) if window else None,
+            "published": published, "logged": acc["logged"], "lost": acc["lost"],
+            "unaccounted": published - acc["logged"] - acc["lost"], "publisher_late": res["late"],
+            "accounting": acc["record"],
+            "thread_cpu_fraction": {k: (th1[k] - th0[k]) / (t1 - t0) for k in th0}}
+
+
+def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, bar: float = 27.5,
+        rate: float = 1000.0, busy: int = 0, params: tuple = (), settle: float = 1.5, out=print) -> dict:
+    """Measure and print; returns the figures as a dict."""
+    result: dict = {"model": model, "rate_hz": rate, "busy": busy, "params": list(params),
+                    "executor": os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset"),
+                    "model_thread": os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0",
+                    "startup_s": [], "rows": []}
+    with tempfile.TemporaryDirectory() as td:
+        tmp = Path(td)
+        for k in range(2):
+            proc, t, _ = _start(tmp, model, f"start{k}.log", params)
             _stop(proc)
-            ex.shutdown(timeout_sec=1.0)
-            node.destroy_node()
-            rclpy.try_shutdown(context=ctx)
+            result["startup_s"].append(t)
+        out(f"twin_node startup (Popen -> ready): first {result['startup_s'][0]:.2f} s, "
+            f"warm {result['startup_s'][1]:.2f} s")
+        busy_procs = start_busy(busy)
+        peer = _Peer()
+        try:
+            out(f"twin_node ({model}, {bar:g} bar, inputs at {rate:g} Hz from a separate process, {seconds:g} s "
+                f"per speed, {busy} busy process(es), executor {result['executor']}, "
+                f"model thread {'on' if result['model_thread'] else 'off'})")
+            out(f"  {'rpm':>5s} {'node CPU':>9s} {'core RTF':>9s} {'node RTF':>9s} {'lat p50':>8s} {'lat p99':>8s} "
+                f"{'skips':>5s} {'published':>10s} {'logged':>8s} {'lost':>6s} {'unacc.':>7s}")
+            for rpm in rpms:
+                r = _one_speed(tmp, model, params, peer, rpm, bar, rate, seconds, settle)
+                result["rows"].append(r)
+                out(f"  {rpm:5g} {100 * r['node_cpu_fraction']:8.0f}% {r['core_rtf']:9.2f} {r['node_rtf']:9.2f} "
+                    f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['skips'] or 0:5d} {r['published']:10d} "
+                    f"{r['logged']:8d} {r['lost']:6d} {r['unaccounted']:7d}   "
+                    + " ".join(f"{k} {100 * v:.0f}%" for k, v in r["thread_cpu_fraction"].items()))
+        finally:
+            peer.close()
+            stop_busy(busy_procs)
     return result
 
 
@@ -175,7 +320,12 @@ def cmd_bench_node(args) -> int:
         rpms = tuple(int(float(r)) for r in str(args.node_rpms).split(","))
     except ValueError:
         raise InputError("--node-rpms", args.node_rpms, "comma-separated speeds [rpm]") from None
-    res = run(model=args.node_model, rpms=rpms, seconds=args.node_seconds)
+    if not 1.0 <= args.node_rate <= 20000.0:
+        raise InputError("--node-rate", args.node_rate, "[1, 20000] Hz")
+    if not 0 <= args.node_busy <= 64:
+        raise InputError("--node-busy", args.node_busy, "0 to 64 processes")
+    res = run(model=args.node_model, rpms=rpms, seconds=args.node_seconds, rate=args.node_rate,
+              busy=args.node_busy, params=tuple(args.node_param or ()))
     if args.json:
         Path(args.json).write_text(json.dumps({"node": res}, indent=2))
         print(f"wrote {args.json}")

@@ -26,10 +26,16 @@ def register(subparsers) -> None:
     for action in bench._actions:                                    # noqa: SLF001 - extend choices
         if action.dest == "what" and action.choices is not None:
             action.choices = tuple(action.choices) + ("node",)
-            action.help = (action.help or "") + "; node: twin node startup time and node-level RTF"
+            action.help = (action.help or "") + "; node: twin node startup, CPU, RTF, latency, input accounting"
     bench.add_argument("--node-model", default="mobility", help="bench node: outer-gear model")
     bench.add_argument("--node-rpms", default="1000,2000,3000", help="bench node: comma-separated speeds [rpm]")
     bench.add_argument("--node-seconds", type=float, default=4.0, help="bench node: run time per speed [s]")
+    bench.add_argument("--node-rate", type=float, default=1000.0,
+                       help="bench node: input rate of the separate publisher process, per input [Hz]")
+    bench.add_argument("--node-busy", type=int, default=0,
+                       help="bench node: CPU-bound processes to run beside it (a loaded machine)")
+    bench.add_argument("--node-param", action="append", metavar="NAME:=VALUE",
+                       help="bench node: extra twin_node parameter (repeatable)")
     previous = bench.get_default("func")
 
     def dispatch(args):

@@ -12,27 +12,44 @@ What it does
       CDR bytes are logged to MCAP untouched (receive time = node clock, publish
       time = source time), decoded with :mod:`gerotor_twin.twin.decode` and
       handed to the core with the node-clock receive time;
-    * ticks the core on a node-clock timer (``use_sim_time`` follows ``/clock``),
-      encodes every output once with the project codec, publishes those bytes
-      (reliable QoS) and logs the same bytes (``log_time`` = prediction time);
+    * ticks the core at the whole multiples of ``1/tick_rate_hz`` on the node
+      clock (``use_sim_time`` follows ``/clock``), encodes every output once with
+      the project codec, publishes those bytes (reliable QoS) and logs the same
+      bytes (``log_time`` = prediction time);
     * publishes ``/diagnostics`` (core statuses + MCAP log status) at
-      ``diagnostics_rate_hz``, and once as soon as it is ready; under
-      ``use_sim_time`` on a wall-clock (steady) timer, so a ``/clock`` that
-      stops is reported (``clock stalled``, WARN, stamped with the last clock
-      time); nothing is published before the first ``/clock``;
+      ``diagnostics_rate_hz``, and once as soon as it is ready; nothing is
+      published or logged before the clock is valid (``use_sim_time``: before the
+      first ``/clock``); a ``/clock`` that stops is reported on ``/diagnostics`` by a
+      wall-clock (steady) timer (``clock stalled``, WARN, stamped with the last
+      clock time);
     * more than one publisher on an input topic: the first source is followed
-      (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs)
-      are listed and WARNed on ``/diagnostics``;
-    * one single-threaded executor: a tick integrates at most ``max_span_s``
-      (lag policy), inputs wait in the subscription history
-      (``input_queue_depth``) meanwhile; rclpy's multi-threaded executor was
-      measured slower (``GEROTOR_TWIN_EXECUTOR=multi`` selects it);
-    * SIGINT / SIGTERM: stop spinning, close the MCAP log (drained and
-      finalised), exit 0.  Any exception escaping a callback is logged and
-      counted; the log is closed in a ``finally`` and at interpreter exit.
+      (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs) are
+      listed and WARNed on ``/diagnostics``;
+    * the MCAP log and its policy (files, decimation, crash recovery at start,
+      disk full): :mod:`gerotor_twin.ros.node_log`;
+    * threads (docs/node.md has the measurements behind this): the receiving
+      thread (:class:`~gerotor_twin.ros.receiver.InputReceiver`, one rcl wait set
+      on the input subscriptions of the service-free node ``<name>_inputs``)
+      only receives inputs -- stamps them with the node clock, logs the raw
+      bytes, books their publisher sequence numbers (gaps = inputs lost before
+      reception, counted per input) and hands them over through a lock held for
+      microseconds (:class:`~gerotor_twin.twin.inbox.Inbox`); the model thread
+      decodes them into the core, ticks it, publishes and logs the outputs and
+      ``/diagnostics``; a third thread spins this node (parameter services,
+      ``/clock``).  The numba kernels release the GIL, so reception runs beside
+      the model advance.  Measurement switches (environment):
+      ``GEROTOR_TWIN_MODEL_THREAD=0``, ``GEROTOR_TWIN_INPUT_NODE=0``,
+      ``GEROTOR_TWIN_EXECUTOR=waitset|single|events|multi`` (Jazzy's
+      EventsExecutor gives callbacks no message info: losses not countable);
+    * SIGINT / SIGTERM: stop the model, keep receiving and logging inputs until
+      none came for 0.2 s (at most 3 s), write ``gerotor_twin.input_accounting``,
+      close the MCAP log (drained and finalised), exit 0.  Any exception escaping
+      a callback is logged and counted; the log is closed in a ``finally`` and at
+      interpreter exit.
 """
 from __future__ import annotations
 
+import functools
 import os
 import signal
 import sys
@@ -56,6 +73,8 @@ from gerotor_twin.twin.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
 from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
+from gerotor_twin.twin.inbox import Inbox  # noqa: E402
+from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata  # noqa: E402
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
@@ -103,37 +122,42 @@ class TwinNode(Node):
         self.stopping = False
         self.callback_errors = 0
         self.last_callback_error = ""
-        self._log_lock = threading.Lock()
         self.log = None
+        self._init_threads(prm)
 
         sensor_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=prm["input_queue_depth"],
                                 reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.VOLATILE)
-        self._in_group = MutuallyExclusiveCallbackGroup()
+        self._in_group = MutuallyExclusiveCallbackGroup()     # one input callback at a time (SequenceGaps)
         self._tick_group = MutuallyExclusiveCallbackGroup()
-        self._diag_group = MutuallyExclusiveCallbackGroup()
-        self._core_lock = threading.Lock()       # tick and diagnostics never overlap
         self.pubs = {t: self.create_publisher(_msg_class(mt), t, out_qos) for t, mt in OUTPUT_TOPICS.items()}
         self.pubs[DIAGNOSTICS_TOPIC] = self.create_publisher(_msg_class(m.DIAGNOSTIC_ARRAY), DIAGNOSTICS_TOPIC,
                                                              out_qos)
         self.fq = {t: p.topic_name for t, p in self.pubs.items()}     # fully qualified (remapped) names
         self.subs = {}
+        self.input_callbacks = {}
+        self.input_node = self._make_input_node()
         for kind, spec in INPUTS.items():
             topic = prm[f"{kind}_topic"]
             if not topic:
                 continue
-            sub = self.create_subscription(_msg_class(spec.msgtype), topic, self._input_cb(kind, spec.msgtype),
-                                           sensor_qos, callback_group=self._in_group, raw=True)
+            cb = self.input_callbacks[kind] = self._input_cb(kind, spec.msgtype)
+            if self.executor_kind == "events":   # Jazzy's EventsExecutor passes no message info:
+                cb = functools.partial(lambda c, data: c(data, None), cb)     # losses cannot be counted
+            group = self._in_group if self.input_node is self else None   # (input node: its default group)
+            sub = self.input_node.create_subscription(_msg_class(spec.msgtype), topic, cb, sensor_qos,
+                                                      callback_group=group, raw=True)
             self.subs[kind] = sub
         self._open_log()
-        self.tick_timer = self.create_timer(1.0 / prm["tick_rate_hz"], self._safe(self._tick),
-                                            callback_group=self._tick_group)
+        self.tick_timer = self._start_ticking()
         self.clock_watch = ClockWatch(prm["clock_stall_s"])
-        self.diag_timer = self.create_timer(1.0 / prm["diagnostics_rate_hz"], self._safe(self._diagnostics),
-                                            callback_group=self._diag_group, clock=self._diagnostics_clock())
+        self.clock_timer = self._watch_clock_timer()
         self.startup_s = time.monotonic() - _T_START
-        self._diagnostics()                      # a first /diagnostics right away: "ready"
+        with self._step_lock:
+            self._diagnostics(self.get_clock().now().nanoseconds)   # a first /diagnostics right away: "ready"
+        if self.model_thread is not None:
+            self.model_thread.start()
         self.get_logger().info(
             f"ready in {self.startup_s:.2f} s (process start to first tick possible): {prm['bearing_model']} "
             f"model, {self.model.N} chambers, inputs {sorted(s.topic_name for s in self.subs.values())}, "
@@ -166,6 +190,79 @@ class TwinNode(Node):
         """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""
         return now_ns > 0
 
+    def _init_threads(self, prm) -> None:
+        """Inbox, tick grid and the measurement switches (environment; docs/node.md)."""
+        self.model_thread_on = os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0"
+        self.executor_kind = os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset")
+        if self.executor_kind not in _EXECUTORS:
+            raise InputError("GEROTOR_TWIN_EXECUTOR", self.executor_kind, " | ".join(_EXECUTORS))
+        if self.executor_kind == "waitset" and os.environ.get("GEROTOR_TWIN_INPUT_NODE") == "0":
+            raise InputError("GEROTOR_TWIN_INPUT_NODE", "0", "1 with GEROTOR_TWIN_EXECUTOR=waitset")
+        self.received = dict.fromkeys(INPUTS, 0)
+        self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
+        self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
+        self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
+        self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
+        self._tick_ns = max(1, int(round(1e9 / prm["tick_rate_hz"])))
+        self._diag_ns = max(1, int(round(1e9 / prm["diagnostics_rate_hz"])))
+        self._next_diag: int | None = None
+        self._wake = threading.Event()
+        self._step_lock = threading.Lock()       # one step at a time (model thread vs shutdown)
+        self.model_thread = None
+
+    def _make_input_node(self) -> Node:
+        """The node that holds the input subscriptions: ``<name>_inputs``, without services.
+
+        rclpy's executor walks every entity of its nodes at each wake-up; the
+        parameter and type-description services of this node made that cost
+        about 20 % of a core at 1 kHz inputs (docs/node.md).  The inputs live
+        on a service-free node, spun alone on the receiving thread; this node
+        (parameters, sim-time clock, publishers) is spun on a second, mostly
+        idle thread.  ``GEROTOR_TWIN_INPUT_NODE=0``: inputs on this node.
+        """
+        if os.environ.get("GEROTOR_TWIN_INPUT_NODE") == "0":
+            return self
+        from rclpy.parameter import Parameter
+        return rclpy.create_node(
+            f"{self.get_name()}_inputs", namespace=self.get_namespace(), context=self.context,
+            start_parameter_services=False, enable_rosout=False,
+            parameter_overrides=[Parameter("start_type_description_service", value=False),
+                                 Parameter("use_sim_time", value=False)])
+
+    def _start_ticking(self):
+        """The tick timer (sim time: wakes the model thread; no model thread: runs the step)."""
+        period = 1.0 / self.prm["tick_rate_hz"]
+        if not self.model_thread_on:
+            return self.create_timer(period, self._safe(self._step), callback_group=self._tick_group)
+        self.model_thread = threading.Thread(target=self._model_loop, name="twin-model", daemon=True)
+        if self.prm["use_sim_time"]:
+            return self.create_timer(period, self._wake.set, callback_group=self._tick_group)
+        return None
+
+    def _model_loop(self) -> None:
+        """Model thread: a step at every whole multiple of the tick period (wall) or timer wake (sim)."""
+        _name_os_thread(b"twin-model")
+        sim = self.prm["use_sim_time"]
+        while not self.stopping:
+            if sim:
+                if not self._wake.wait(0.1):
+                    continue
+            else:
+                now = time.time_ns()
+                self._wake.wait(((now // self._tick_ns + 1) * self._tick_ns - now) / 1e9)
+            self._wake.clear()
+            try:
+                self._step()
+            except Exception as exc:  # noqa: BLE001 - the node must keep running
+                self._callback_error(exc)
+
+    def stop_model(self, timeout_s: float = 5.0) -> None:
+        """Stop ticking (inputs are still received and logged); idempotent."""
+        self.stopping = True
+        self._wake.set()
+        if self.model_thread is not None and self.model_thread.is_alive():
+            self.model_thread.join(timeout_s)
+
     def _callback_error(self, exc: Exception) -> None:
         self.callback_errors += 1
         self.last_callback_error = clip(f"{type(exc).__name__}: {exc}", 300)
@@ -184,40 +281,77 @@ class TwinNode(Node):
 
     # ------------------------------------------------------------- callbacks
     def _input_cb(self, kind: str, msgtype: str):
+        topic = None
+
         def cb(data: bytes, info: dict) -> None:
-            recv = self.get_clock().now().nanoseconds
-            if not self._clock_valid(recv):     # use_sim_time, no /clock yet: nothing stamped 0
-                self.log_files.before_clock += 1
-                return
-            log = self.log
-            seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+            nonlocal topic
+            info = info if isinstance(info, dict) else {}
+            seq = info.get("publication_sequence_number") if self.count_losses else None
             seq = seq if isinstance(seq, int) and 0 < seq < 2**63 else None     # per publisher; None: unknown
-            if log is not None:
-                src = info.get("source_timestamp") if isinstance(info, dict) else None
-                log.write_raw(self.subs[kind].topic_name, data, recv, src or recv,
-                              sequence=seq if seq is not None and seq < 2**32 else None)
-            try:
-                msg = decode(msgtype, data)
-            except InputError as exc:
-                self.core.reject(kind, str(exc), recv)
+            if self.prm["use_sim_time"] and not self._clock_valid(self.get_clock().now().nanoseconds):
+                self.log_files.before_clock += 1       # no /clock yet: nothing stamped 0
                 return
-            self.core.add_message(kind, msg, recv, sequence=seq)
+            recv = self.inbox.put(kind, data, seq)     # decoded and added to the core by the model thread
+            self.received[kind] += 1
+            log = self.log
+            if log is not None:
+                topic = topic or self.subs[kind].topic_name
+                src = info.get("source_timestamp")
+                try:
+                    log.write_raw(topic, data, recv, src or recv,
+                                  sequence=seq if seq is not None and seq < 2**32 else None)
+                except Exception as exc:  # noqa: BLE001 - counted as not logged; reception goes on
+                    self.log_refused[kind] += 1
+                    self._callback_error(exc)
+            self.core.note_sequence(kind, seq, recv)
 
         def wrapped(data, info):        # two parameters: rclpy passes (bytes, message info)
             try:
                 cb(data, info)
+                if self.drain_batch > 1 and self.executor_kind != "waitset":   # (waitset: the receiver does)
+                    self._drain_subscription(kind, cb)
             except Exception as exc:  # noqa: BLE001 - the node must keep running
                 self._callback_error(exc)
         return wrapped
 
-    def _tick(self) -> None:
-        if self.stopping:
-            return
-        with self._core_lock:
-            now = self.get_clock().now().nanoseconds
+    def _drain_subscription(self, kind: str, cb) -> None:
+        """Take the messages waiting in ``kind``'s history now (up to ``drain_batch``), not one per wait.
+
+        rclpy's executor takes one message per wake-up (wait set rebuilt each
+        time); at 1 kHz that overhead dominates the node's CPU (docs/node.md).
+        """
+        sub = self.subs[kind]
+        for _ in range(self.drain_batch - 1):
+            with sub.handle:
+                got = sub.handle.take_message(sub.msg_type, True)
+            if got is None:
+                return
+            cb(got[0], got[1])
+
+    def _step(self) -> None:
+        """Inputs received so far into the core, one tick, outputs out, /diagnostics when due."""
+        with self._step_lock:
+            if self.stopping:
+                return
+            now, items = self.inbox.take()
             if not self._clock_valid(now):
                 return
-            res = self.core.tick(now)
+            self._to_core(items)
+            self._tick(now)
+            if self._next_diag is None or now >= self._next_diag or now < self._next_diag - self._diag_ns:
+                self._diagnostics(now)
+
+    def _to_core(self, items) -> None:
+        for kind, data, recv, seq in items:
+            try:
+                msg = decode(INPUTS[kind].msgtype, data)
+            except InputError as exc:
+                self.core.reject(kind, str(exc), recv)
+                continue
+            self.core.add_message(kind, msg, recv, sequence=seq)
+
+    def _tick(self, now: int) -> None:
+        res = self.core.tick(now)
         for out in res.messages:
             data = encode(out.msgtype, out.msg)
             self.pubs[out.topic].publish(data)
@@ -227,23 +361,30 @@ class TwinNode(Node):
         for level, text in self.core.pop_events():
             (logger.error if level >= 2 else logger.warning)(text)
 
-    def _diagnostics_clock(self):
-        """Wall (steady) clock for /diagnostics under use_sim_time, so a stopped /clock is reported."""
+    def _watch_clock_timer(self):
+        """Under use_sim_time: a steady (wall) timer that reports a stalled /clock on /diagnostics."""
         if not self.prm["use_sim_time"]:
             return None
         from rclpy.clock import Clock, ClockType
-        return Clock(clock_type=ClockType.STEADY_TIME)
+        return self.create_timer(1.0 / self.prm["diagnostics_rate_hz"], self._safe(self._watch_clock),
+                                 callback_group=self._tick_group, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
-    def _diagnostics(self) -> None:
-        if self.stopping:
-            return
-        now = self.get_clock().now().nanoseconds
+    def _watch_clock(self) -> None:
+        """Steady timer: /diagnostics from here while the clock is stalled (the model thread waits for it)."""
+        with self._step_lock:
+            if self.stopping:
+                return
+            now = self.get_clock().now().nanoseconds
+            if self.clock_watch.update(now, time.monotonic()).status == "stalled":
+                self._diagnostics(now)
+
+    def _diagnostics(self, now: int) -> None:
+        """Publish (and log when due) /diagnostics stamped ``now``; caller holds ``_step_lock``."""
         clock = self.clock_watch.update(now, time.monotonic())
         if clock.status == "waiting" or not self._clock_valid(now):
             return                               # no valid time to stamp it with yet (sim time before /clock)
-        extra = [self._node_status(clock)]
-        with self._core_lock:
-            diag = self.core.diagnostics(now, extra)
+        self._next_diag = (now // self._diag_ns + 1) * self._diag_ns
+        diag = self.core.diagnostics(now, [self._node_status(clock)])
         data = encode(m.DIAGNOSTIC_ARRAY, diag)
         self.pubs[DIAGNOSTICS_TOPIC].publish(data)
         if self.log is not None and self.log_files.due(DIAGNOSTICS_TOPIC, diag):
@@ -252,7 +393,10 @@ class TwinNode(Node):
     def _node_status(self, clock=None) -> dict:
         values = {"startup_s": round(self.startup_s, 3), "callback_errors": self.callback_errors,
                   "last_callback_error": self.last_callback_error,
-                  "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"]}
+                  "use_sim_time": self.prm["use_sim_time"], "bearing_model": self.prm["bearing_model"],
+                  "executor": self.executor_kind, "model_thread": self.model_thread_on,
+                  "input_losses_counted": self.count_losses,
+                  "model_inbox_dropped": self.inbox.dropped}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
         many = self._input_publishers(values)
@@ -285,12 +429,93 @@ class TwinNode(Node):
         return many
 
     # -------------------------------------------------------------- shutdown
+    def _log_drops(self, log) -> dict[str, int]:
+        """Inputs received but not logged, per topic: writer queue full or refused by ``write_raw``."""
+        out = dict(log.stats().dropped_queue_full)
+        for kind, n in self.log_refused.items():
+            if n and kind in self.subs:
+                out[self.subs[kind].topic_name] = out.get(self.subs[kind].topic_name, 0) + n
+        return out
+
     def close_log(self) -> None:
         """Drain and finalise the MCAP log (idempotent, signal-safe)."""
         log = self.log
         if log is not None:
+            if not log.closed:
+                log.add_metadata(ACCOUNTING_METADATA, accounting_metadata(
+                    self.core.input_accounting(), self.core.input_report(0), self._log_drops(log),
+                    {k: s.topic_name for k, s in self.subs.items()}, self.inbox.dropped))
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
+
+
+def _name_os_thread(name: bytes) -> None:
+    """Name the calling thread for the OS (``top -H``, /proc/<pid>/task/*/comm); Linux only, best effort."""
+    try:
+        import ctypes
+        ctypes.CDLL(None).prctl(15, ctypes.c_char_p(name[:15]), 0, 0, 0)   # PR_SET_NAME
+    except (OSError, AttributeError):
+        pass
+
+
+def _spin_main_node(node: TwinNode, stop: threading.Event) -> threading.Thread:
+    """Spin the main node (parameter services, /clock, sim-time tick timer) on its own thread."""
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+
+    def spin():
+        try:
+            while not stop.is_set() and rclpy.ok():
+                ex.spin_once(timeout_sec=0.1)
+        except Exception:  # noqa: BLE001 - context shut down
+            pass
+        finally:
+            ex.shutdown(timeout_sec=1.0)
+
+    t = threading.Thread(target=spin, name="twin-main-node", daemon=True)
+    t.start()
+    return t
+
+
+def _drain_inputs(node: TwinNode, executor, idle_s: float = 0.2, max_s: float = 3.0) -> None:
+    """After a stop: keep receiving (and logging) until no input came for ``idle_s``, at most ``max_s``."""
+    t_end = time.monotonic() + max_s
+    last, t_last = -1, time.monotonic()
+    while time.monotonic() < t_end and time.monotonic() - t_last < idle_s:
+        n = sum(node.received.values())
+        if n != last:
+            last, t_last = n, time.monotonic()
+        try:
+            executor.spin_once(timeout_sec=0.02)
+        except Exception:  # noqa: BLE001 - shutting down anyway
+            break
+
+
+_EXECUTORS = ("waitset", "single", "events", "multi")
+
+
+def _executor(node: TwinNode):
+    """The receiving loop over the input node (docs/node.md compares them).
+
+    ``waitset`` (default): :class:`~gerotor_twin.ros.receiver.InputReceiver`;
+    ``single`` / ``multi`` / ``events``: rclpy's executors.
+    """
+    kind = node.executor_kind
+    if kind == "waitset":
+        from gerotor_twin.ros.receiver import InputReceiver
+        return InputReceiver(node.context, node.subs, node.input_callbacks, node.drain_batch)
+    ex = _rclpy_executor(kind)
+    ex.add_node(node.input_node)
+    return ex
+
+
+def _rclpy_executor(kind: str):
+    if kind == "events":
+        from rclpy.experimental import EventsExecutor
+        return EventsExecutor()
+    if kind == "multi":
+        return MultiThreadedExecutor(num_threads=2)
+    return SingleThreadedExecutor()
 
 
 def _validated_parameters(args: list[str]) -> dict | None:
@@ -336,6 +561,7 @@ def main(argv=None) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signals[sig] = signal.signal(sig, on_signal)
     code = 0
+    main_spin = None
     try:
         try:
             node = TwinNode(param_values)
@@ -345,28 +571,25 @@ def main(argv=None) -> int:
                 print(f"error: {one_line(exc)}", file=sys.stderr)
                 return 2
             raise
-        # rclpy's MultiThreadedExecutor costs more than it gains here (measured: node RTF 0.8 vs 1.8
-        # at 2000 rpm); ticks are bounded by max_span_s and inputs wait in the DDS history meanwhile.
-        executor = (MultiThreadedExecutor(num_threads=2) if os.environ.get("GEROTOR_TWIN_EXECUTOR") == "multi"
-                    else SingleThreadedExecutor())
-        executor.add_node(node)
+        executor = _executor(node)
+        main_spin = _spin_main_node(node, stop) if node.input_node is not node else None
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         if node is not None:
-            node.stopping = True                 # ticks become no-ops; inputs still logged
+            node.stop_model()                    # ticks stop; inputs still received and logged
             if executor is not None and rclpy.ok():
-                deadline = time.monotonic() + 0.3    # drain inputs already delivered to the readers
-                while time.monotonic() < deadline:
-                    try:
-                        executor.spin_once(timeout_sec=0.05)
-                    except Exception:  # noqa: BLE001 - shutting down anyway
-                        break
+                _drain_inputs(node, executor)
             if executor is not None:
                 executor.shutdown(timeout_sec=2.0)
+            stop.set()
+            if main_spin is not None:
+                main_spin.join(2.0)
             node.close_log()
+            if node.input_node is not node:
+                node.input_node.destroy_node()
             node.destroy_node()
         rclpy.try_shutdown()
         for sig, h in signals.items():

@@ -43,11 +43,11 @@ class Param:
 PARAMETERS: tuple[Param, ...] = (
     Param("pump_config", "", "pump YAML file (geometry, fluid, clearances); '' = the packaged config/pump.yaml"),
     Param("bearing_model", "mobility", "outer-gear model", choices=("mobility", "short", "fdm", "fixed")),
-    Param("tick_rate_hz", 100.0, "model tick rate on the node clock [Hz] (under use_sim_time at most one "
+    Param("tick_rate_hz", 200.0, "model tick rate on the node clock [Hz] (under use_sim_time at most one "
                                  "tick per /clock message)", 1.0, 1000.0),
     Param("sample_period_s", 0.005, "input sampling grid: zero-order hold cell and finest output step [s]",
           0.0005, 0.1),
-    Param("publish_rate_hz", 50.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
+    Param("publish_rate_hz", 200.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
     Param("clock_stall_s", 1.0, "the node clock unchanged this long in wall time is reported as stalled on "
@@ -60,7 +60,8 @@ PARAMETERS: tuple[Param, ...] = (
           "std_msgs/Float64 measured delivery flow [m^3/s] (optional, for live residuals; '' = off)"),
     Param("oil_temperature_topic", "bench/oil_temperature",
           "sensor_msgs/Temperature oil temperature [degC] (optional, reported only; '' = off)"),
-    Param("input_queue_depth", 100, "subscription history depth (sensor-data QoS) [messages]", 1, 100000),
+    Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
+                                     "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
     Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",
           0.0, 60.0),
     Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),

@@ -31,6 +31,10 @@ module              content
                     layout
 ``diagnostics``     DiagnosticStatus dicts from :meth:`TwinCore.snapshot`
 ``decode``          CDR bytes -> message (no rclpy), for raw subscriptions
+``sequence``        :class:`SequenceGaps`: inputs lost before reception, from
+                    gaps in the publishers' sequence numbers; the
+                    ``gerotor_twin.input_accounting`` MCAP record
+``inbox``           :class:`Inbox`: receiving thread -> model thread hand-over
 ==================  =======================================================
 """
 from gerotor_twin.twin.core import TickResult, TwinCore

@@ -93,6 +93,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
+from gerotor_twin.twin.sequence import SequenceGaps
 from gerotor_twin.twin.settings import NS, TwinSettings
 from gerotor_twin.twin.sources import SourceTracker
 from gerotor_twin.twin.stamps import REBASE, RESTART, StampGuard
@@ -146,6 +147,7 @@ class TwinCore:
         self._channels = {k: InputChannel(spec, self._S, s.filter_tau_s, self._stamp_guard())
                           for k, spec in INPUTS.items()}
         self._sources = {k: SourceTracker(switch_after_ns=int(s.stale_timeout_s * NS)) for k in INPUTS}
+        self._gaps = {k: SequenceGaps() for k in INPUTS}
         self._default_ps = float(model.config.boundary.suction_pressure_pa)
         wmax = model.config.range.max_speed_rpm * math.pi / 30
         self._flow_limit = 10.0 * model.theoretical_flow(wmax) + 1e-6
@@ -196,6 +198,32 @@ class TwinCore:
                 self._reject(self._channels[kind], "malformed", str(exc), int(receive_ns))
             return False
         return self.add_sample(kind, value, stamp, receive_ns)
+
+    def note_sequence(self, kind: str, seq: int | None, receive_ns: int) -> int:
+        """Book the publisher sequence number of a received ``kind`` message (any thread).
+
+        Call it once per message received, before or after :meth:`add_message`;
+        gaps are counted as ``lost`` (see :mod:`gerotor_twin.twin.sequence`).
+
+        Returns
+        -------
+        int
+            Messages this number shows lost before reception (usually 0).
+        """
+        if kind not in INPUTS:
+            raise InputError("input", kind, " | ".join(INPUTS))
+        with self._lock:
+            gap = self._gaps[kind].add(seq, int(receive_ns))
+            if gap:
+                self._report(kind, "lost", 1, f"{kind}: {gap} message(s) lost before reception (gap in the "
+                             "publisher's sequence numbers; input_queue_depth too small or the node stalled?)",
+                             int(receive_ns))
+        return gap
+
+    def input_accounting(self) -> dict[str, dict[str, int]]:
+        """Per input: received, lost, missed_at_start, ... (:class:`~gerotor_twin.twin.sequence.GapCounts`)."""
+        with self._lock:
+            return {k: g.counts().as_dict() for k, g in self._gaps.items()}
 
     def reject(self, kind: str, text: str, receive_ns: int, reason: str = "malformed") -> None:
         """Count and report a message of ``kind`` that could not even be decoded."""
@@ -609,6 +637,7 @@ class TwinCore:
                           "accepted": ch.accepted, "clamped": ch.clamped, "rejected": dict(ch.rejected),
                           "stamp_restarts": ch.stamp_restarts, "stamp_rebases": ch.stamp_rebases,
                           "zero_stamps": ch.zero_stamps, "last_error": ch.last_error,
+                          "lost": self._gaps[k].lost, "missed_at_start": self._gaps[k].missed_at_start,
                           **self._source_report(k, now_ns)}
         return out
 
@@ -666,6 +695,7 @@ class TwinCore:
         for k, info in snap["inputs"].items():
             counts[f"rejected.{k}"] = sum(info["rejected"].values())
             counts[f"zero_stamps.{k}"] = info["zero_stamps"]
+            counts[f"lost.{k}"] = info["lost"]
         prev = self._win["counts"]
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}

@@ -83,6 +83,8 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
         values[f"{kind}.clamped"] = info["clamped"]
         for reason, n in info["rejected"].items():
             values[f"{kind}.rejected.{reason}"] = n
+        values[f"{kind}.lost"] = info.get("lost", 0)
+        values[f"{kind}.missed_at_start"] = info.get("missed_at_start", 0)
         values[f"{kind}.stamp_restarts"] = info["stamp_restarts"]
         values[f"{kind}.stamp_rebases"] = info.get("stamp_rebases", 0)
         values[f"{kind}.zero_stamps"] = info.get("zero_stamps", 0)
@@ -92,7 +94,7 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
         if kind in REQUIRED and (age is None or age > stale_timeout_s):
             level = max(level, m.DIAG_STALE if age is None else m.DIAG_WARN)
             problems.append(f"{kind} {'missing' if age is None else f'stale ({age:.3g} s)'}")
-        if delta.get(f"rejected.{kind}", 0):
+        if delta.get(f"rejected.{kind}", 0) or info.get("lost", 0):
             level = max(level, m.DIAG_WARN)
     bad = [f"{k}: {delta[f'rejected.{k}']} rejected ({i['last_error']})" for k, i in snap["inputs"].items()
            if delta.get(f"rejected.{k}", 0)]
@@ -107,6 +109,8 @@ def input_status(snap: dict, stale_timeout_s: float, delta: dict[str, int] | Non
     if many:
         level = max(level, m.DIAG_WARN)
     bad += many
-    msg = "; ".join(problems + bad) or "ok"
+    lost = [f"{k}: {i['lost']} lost before reception ({delta.get(f'lost.{k}', 0)} in the last period)"
+            for k, i in snap["inputs"].items() if i.get("lost", 0)]
+    msg = "; ".join(problems + bad + lost) or "ok"
     return m.diagnostic_status(min(level, m.DIAG_STALE), INPUT_STATUS_NAME, msg, hardware_id="gerotor_twin",
                                values=values)
