@@ -74,6 +74,7 @@ def test_load_messages_and_bad_topics(bag):
         load_messages(bag, ["/bench/nothing"])
 
 
+@pytest.mark.slow
 def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
     out = tmp_path / "got.json"
     dom = claim_domain()
@@ -101,6 +102,7 @@ def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
     assert clock[0] >= rows[0][0] and clock[-1] == rows[-1][0]    # bag time base, ends at the last message
 
 
+@pytest.mark.slow
 def test_sigterm_stops_a_looping_replay(bag):
     rep = _start([sys.executable, "-m", "gerotor_twin", "replay", str(bag), "--loop", "--rate", "5",
                   "--delay", "0.2"], claim_domain())

@@ -86,6 +86,7 @@ def test_progress_bar_has_eta(bench_bytes, tmp_path):
     assert "100.0 %" in err.getvalue() and "run-bag" in err.getvalue()
 
 
+@pytest.mark.slow
 def test_node_and_run_bag_agree(tmp_path):
     """The node fed by ``replay`` (use_sim_time, /clock 50 Hz) and run-bag predict the same mean flow.
 
