@@ -29,7 +29,7 @@ from gerotor_twin.io.mcap_log import NODE_PARAMETERS_METADATA, PUMP_CONFIG_METAD
 from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
 from gerotor_twin.twin.core import TwinCore
 from gerotor_twin.twin.inputs import INPUTS
-from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, OUTPUT_TOPICS
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics
 from gerotor_twin.twin.settings import NS, TwinSettings
 
 __all__ = ["run_bag", "RUN_BAG_METADATA"]
@@ -132,11 +132,8 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
     log = McapLog(output, overwrite=overwrite, metadata={
         PUMP_CONFIG_METADATA: {"yaml": cfg_text}, NODE_PARAMETERS_METADATA: params,
         RUN_BAG_METADATA: {"model": model, "bag": str(f.path)}})
-    for name in kinds:
-        log.add_topic(name, f.topic_types()[name], qos="sensor")
-    for topic, msgtype in OUTPUT_TOPICS.items():
-        log.add_topic("/" + topic, msgtype, qos="reliable")
-    log.add_topic(DIAGNOSTICS_TOPIC, "diagnostic_msgs/msg/DiagnosticArray", qos="reliable")
+    for topic, msgtype, qos in log_topics({name: f.topic_types()[name] for name in kinds}):
+        log.add_topic(topic, msgtype, qos=qos)
     t_first, t_last = rows[0][0], rows[-1][0]
     wall0, shown = time.monotonic(), 0.0
     n_out = n_in = 0

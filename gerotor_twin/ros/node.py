@@ -75,7 +75,7 @@ from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.twin.decode import decode  # noqa: E402
 from gerotor_twin.twin.inbox import Inbox  # noqa: E402
 from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata  # noqa: E402
-from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC  # noqa: E402
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
 __all__ = ["TwinNode", "main"]
@@ -174,10 +174,8 @@ class TwinNode(Node):
         """The MCAP log and its policy (files, crash recovery, decimation, status): ros/node_log.py."""
         from gerotor_twin.ros.node_log import NodeLogFiles
         self.log_files = NodeLogFiles(self.prm, self.get_logger(), self._log_metadata)
-        topics = [(sub.topic_name, INPUTS[kind].msgtype, "sensor") for kind, sub in self.subs.items()]
-        topics += [(self.fq[t], mt, "reliable") for t, mt in OUTPUT_TOPICS.items() if self.log_files.logged(t)]
-        topics.append((self.fq[DIAGNOSTICS_TOPIC], m.DIAGNOSTIC_ARRAY, "reliable"))
-        self.log = self.log_files.open(topics)
+        inputs = {sub.topic_name: INPUTS[kind].msgtype for kind, sub in self.subs.items()}
+        self.log = self.log_files.open(log_topics(inputs, self.fq, self.log_files.logged))
 
     def _log_metadata(self) -> dict:
         from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA

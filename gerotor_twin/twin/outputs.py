@@ -31,14 +31,14 @@ clock time of the prediction (the MCAP ``log_time``).
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from gerotor_twin.io import messages as m
 
 __all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
-           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "summary_messages",
+           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "summary_messages", "log_topics",
            "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
@@ -68,6 +68,26 @@ SUMMARY_VALUE_TOPICS = tuple(f"{FLOW_SUMMARY}/{f}" for f in SUMMARY_FIELDS)
 OUTPUT_TOPICS.update({t: m.FLOAT64 for t in SUMMARY_VALUE_TOPICS})
 #: Its layout label (the field names, comma separated).
 SUMMARY_LABEL = ",".join(SUMMARY_FIELDS)
+
+
+def log_topics(inputs: dict[str, str], names: dict[str, str] | None = None,
+               logged: Callable[[str], bool] = lambda topic: True) -> list[tuple[str, str, str]]:
+    """The channels of a twin log, the node's and run-bag's alike: ``(topic, msgtype, qos)``.
+
+    Parameters
+    ----------
+    inputs : dict
+        Input topic (as received) -> message type; logged with sensor-data QoS.
+    names : dict, optional
+        Relative output name -> fully qualified (remapped) topic; default ``"/" + name``.
+    logged : callable
+        Which outputs have a channel (the node's log policy); ``/diagnostics`` always.
+    """
+    names = names or {}
+    out = [(t, mt, "sensor") for t, mt in inputs.items()]
+    out += [(names.get(t, "/" + t), mt, "reliable") for t, mt in OUTPUT_TOPICS.items() if logged(t)]
+    out.append((names.get(DIAGNOSTICS_TOPIC, DIAGNOSTICS_TOPIC), m.DIAGNOSTIC_ARRAY, "reliable"))
+    return out
 
 
 class OutputMessage(NamedTuple):
