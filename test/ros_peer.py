@@ -23,7 +23,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS
-from gerotor_twin.twin.decode import decode
+from gerotor_twin.io.decode import decode
 
 ROOT = Path(__file__).resolve().parent.parent
 MS = 1_000_000

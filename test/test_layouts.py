@@ -20,7 +20,7 @@ from gerotor_twin.bench_emulator.emulator import SHAFT_JOINT
 from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, SUMMARY_FIELDS
-from gerotor_twin.twin.decode import decode
+from gerotor_twin.io.decode import decode
 
 ROOT = Path(__file__).resolve().parent.parent
 TYPES = {"/" + t: mt for t, mt in OUTPUT_TOPICS.items()}

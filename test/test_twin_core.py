@@ -8,7 +8,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
 from gerotor_twin.twin import OUTPUT_TOPICS, SUMMARY_LABEL, TwinCore, TwinSettings, sample_from_message
-from gerotor_twin.twin.decode import decode
+from gerotor_twin.io.decode import decode
 
 MS = 1_000_000
 W = 2000 * math.pi / 30          # [rad/s]
@@ -298,7 +298,7 @@ def test_settings_validated(kw, field):
 @pytest.mark.parametrize("labels,shape", [(("chamber",), (7,)), (("sample", "angle_p"), (720, 8)),
                                           ((SUMMARY_LABEL,), (4,)), (("x",), (0,)), (("",), (3,))])
 def test_fast_multiarray_cdr_matches_codec(labels, shape):
-    from gerotor_twin.twin.fastcdr import encode_float64_multiarray
+    from gerotor_twin.io.fastcdr import encode_float64_multiarray
     msg = m.float64_multiarray(np.random.default_rng(0).random(shape), labels)
     assert encode_float64_multiarray(msg) == encode(m.FLOAT64_MULTIARRAY, msg)
 

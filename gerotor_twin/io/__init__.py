@@ -12,6 +12,8 @@ module              responsibility
                     rosbag2 ``ros2msg`` complete definition, ``RIHS01`` type hash
 ``qos``             ``offered_qos_profiles`` YAML (Jazzy form); sensor / reliable
 ``codec``           dict/object -> CDR bytes (field names checked, NumPy accepted)
+``fastcdr``         the node's fast encoder (Float64MultiArray by struct, the rest by codec)
+``decode``          CDR bytes -> message (no rclpy), for raw subscriptions
 ``messages``        dict builders: JointState, FluidPressure, Temperature, Float64,
                     Float64MultiArray (labelled layout), Vector3Stamped,
                     DiagnosticArray, Clock; ``stamp_from_ns``

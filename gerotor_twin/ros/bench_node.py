@@ -113,7 +113,7 @@ class _Peer:
         from geometry_msgs.msg import Vector3Stamped
 
         from gerotor_twin.io import messages as m
-        from gerotor_twin.twin.decode import decode
+        from gerotor_twin.io.decode import decode
 
         self.ctx = rclpy.Context()
         rclpy.init(context=self.ctx, domain_id=_domain())
@@ -198,7 +198,7 @@ def wait_line(proc: subprocess.Popen, path: Path, text: str, timeout: float) -> 
 def input_accounting(files: list[Path], stamps: set[int]) -> dict:
     """Read the node's MCAP file(s): inputs logged (by header stamp) and the node's accounting record."""
     from gerotor_twin.io.reader import open_mcap
-    from gerotor_twin.twin.decode import decode
+    from gerotor_twin.io.decode import decode
     from gerotor_twin.twin.sequence import ACCOUNTING_METADATA
     logged, acct = 0, {}
     for f in files:

@@ -10,7 +10,7 @@ What it does
     * declares its parameters (:mod:`gerotor_twin.ros.params`) with descriptors;
     * subscribes to the bench inputs with ``raw=True`` and sensor-data QoS: the
       CDR bytes are logged to MCAP untouched (receive time = node clock, publish
-      time = source time), decoded with :mod:`gerotor_twin.twin.decode` and
+      time = source time), decoded with :mod:`gerotor_twin.io.decode` and
       handed to the core with the node-clock receive time;
     * ticks the core at the whole multiples of ``1/tick_rate_hz`` on the node
       clock (``use_sim_time`` follows ``/clock``), encodes every output once with
@@ -69,10 +69,10 @@ from rclpy.signals import SignalHandlerOptions  # noqa: E402
 
 from gerotor_twin.errors import InputError, clip, one_line  # noqa: E402
 from gerotor_twin.io import messages as m  # noqa: E402
-from gerotor_twin.twin.fastcdr import encode  # noqa: E402
+from gerotor_twin.io.fastcdr import encode  # noqa: E402
 from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
 from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
-from gerotor_twin.twin.decode import decode  # noqa: E402
+from gerotor_twin.io.decode import decode  # noqa: E402
 from gerotor_twin.twin.inbox import Inbox  # noqa: E402
 from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata  # noqa: E402
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics  # noqa: E402

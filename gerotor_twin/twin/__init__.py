@@ -30,7 +30,6 @@ module              content
 ``outputs``         :data:`OUTPUT_TOPICS`, :class:`OutputMessage`, flow-summary
                     layout
 ``diagnostics``     DiagnosticStatus dicts from :meth:`TwinCore.snapshot`
-``decode``          CDR bytes -> message (no rclpy), for raw subscriptions
 ``sequence``        :class:`SequenceGaps`: inputs lost before reception, from
                     gaps in the publishers' sequence numbers; the
                     ``gerotor_twin.input_accounting`` MCAP record
