@@ -1,7 +1,7 @@
 """The ``gerotor-twin`` command.
 
-Subcommands: ``geometry``, ``simulate``, ``demo`` (and those registered by
-sub-packages, e.g. the bearing benchmark).  User errors print one line
+Subcommands: ``geometry``, ``simulate``, ``demo``, ``bench`` here, every other one from the
+``add_parser`` of its owning module listed in ``_COMMAND_MODULES``.  User errors print one line
 ``error: <field> = <value> is invalid; allowed: <range>`` and exit with 2,
 for every command: :class:`~gerotor_twin.errors.InputError`, unreadable MCAP
 input and any ``OSError`` on a path the user gave (a directory, no
@@ -10,6 +10,7 @@ permission) are caught here, the line bounded in length.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import math
 import sys
@@ -187,6 +188,20 @@ def cmd_bench(args) -> int:
 
 
 # ------------------------------------------------------------------- parser
+#: Every command beyond the model's own (geometry, simulate, demo, bench) comes from the
+#: ``add_parser(subparsers)`` of its owning module; this list is the one place they are registered.
+_COMMAND_MODULES = (
+    "gerotor_twin.bearing.cli_commands",          # bearing-steady, bearing-benchmark
+    "gerotor_twin.paper.cli_commands",            # paper efficiency | figures | calibrate
+    "gerotor_twin.bench_emulator.cli_commands",   # synth-bench
+    "gerotor_twin.report.build",                  # report
+    "gerotor_twin.offline.run_bag",               # run-bag
+    "gerotor_twin.ros.replay",                    # replay (imports rclpy only when run)
+    "gerotor_twin.ros.cli_commands",              # node; teaches `bench` the choice `node`
+    "gerotor_twin.io.cli_commands",               # log recover
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gerotor-twin", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -229,16 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", help="write the figures to this JSON file")
     b.set_defaults(func=cmd_bench)
 
-    from .bearing.cli_commands import register as register_bearing
-    from .paper.cli_commands import register as register_paper
-    register_bearing(sub)
-    register_paper(sub)
-    from .report.cli_commands import register as register_offline   # synth-bench, report, run-bag, replay
-    register_offline(sub)
-    from .ros.cli_commands import register as register_node          # node, bench node
-    register_node(sub)
-    from .io.cli_commands import register as register_log             # log recover
-    register_log(sub)
+    for name in _COMMAND_MODULES:
+        importlib.import_module(name).add_parser(sub)
     return p
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from gerotor_twin.bearing.benchmark import (BENCH_OMEGA, benchmark_load, compare_with_ross,
                                             run_benchmark)
-from gerotor_twin.bearing.cli_commands import register
+from gerotor_twin.bearing.cli_commands import add_parser as register
 from gerotor_twin.errors import InputError
 
 STEADY_KEYS = {"eccentricity_ratio", "attitude_angle_deg", "closed_form_eccentricity_ratio",

@@ -1,6 +1,6 @@
 """``gerotor-twin`` subcommands of the bearing part: ``bearing-steady``, ``bearing-benchmark``.
 
-:func:`register` adds them to the project's argparse sub-parsers; each
+:func:`add_parser` adds them to the project's argparse sub-parsers; each
 handler is ``(args) -> int`` and raises :class:`~gerotor_twin.errors.InputError`
 on bad input (the main CLI prints it without a traceback).
 """
@@ -21,12 +21,12 @@ from gerotor_twin.bearing.reynolds_fd import parse_grid
 from gerotor_twin.bearing.simulate import settle
 from gerotor_twin.errors import InputError, check_range, one_line
 
-__all__ = ["register", "cmd_bearing_steady", "cmd_bearing_benchmark", "main"]
+__all__ = ["add_parser", "cmd_bearing_steady", "cmd_bearing_benchmark", "main"]
 
 STEADY_METHODS = ("mobility", "short", "fdm")
 
 
-def register(subparsers) -> None:
+def add_parser(subparsers) -> None:
     """Add ``bearing-steady`` and ``bearing-benchmark`` to an argparse sub-parser set.
 
     Parameters
@@ -175,7 +175,7 @@ def main(argv=None) -> int:
     import sys
 
     parser = argparse.ArgumentParser(prog="python -m gerotor_twin.bearing.cli_commands")
-    register(parser.add_subparsers(dest="command", required=True))
+    add_parser(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -13,10 +13,10 @@ from pathlib import Path
 
 from gerotor_twin.errors import InputError
 
-__all__ = ["register"]
+__all__ = ["add_parser"]
 
 
-def register(subparsers) -> None:
+def add_parser(subparsers) -> None:
     """Add ``log recover`` to an argparse sub-parser set."""
     log = subparsers.add_parser("log", help="MCAP log tools (recover)")
     sub = log.add_subparsers(dest="log_command", required=True)

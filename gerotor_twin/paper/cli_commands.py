@@ -8,7 +8,7 @@ from pathlib import Path
 
 from gerotor_twin.bearing.registry import MODEL_NAMES as MODELS
 
-__all__ = ["register"]
+__all__ = ["add_parser"]
 
 
 def _progress(done, total, pt):
@@ -98,7 +98,7 @@ def cmd_calibrate(args) -> int:
     return 0 if acc["passed"] else 1
 
 
-def register(sub) -> None:
+def add_parser(sub) -> None:
     """Add ``paper`` with its three sub-commands to the ``gerotor-twin`` parser."""
     from .calibration import DEFAULT_RESULT_PATH
 

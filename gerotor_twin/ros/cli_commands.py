@@ -1,6 +1,6 @@
 """``gerotor-twin node`` (run the twin node) and ``gerotor-twin bench node`` (node benchmark).
 
-:func:`register` adds ``node`` to the project's sub-parsers and teaches the
+:func:`add_parser` adds ``node`` to the project's sub-parsers and teaches the
 existing ``bench`` sub-command the choice ``node``; rclpy is imported only
 when one of them runs.
 """
@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["register"]
+__all__ = ["add_parser"]
 
 
-def register(subparsers) -> None:
+def add_parser(subparsers) -> None:
     """Add ``node`` and ``bench node`` to an argparse sub-parser set."""
     n = subparsers.add_parser(
         "node", help="run the ROS 2 twin node (same as `twin_node`); pass --ros-args ... after it",

@@ -1,11 +1,8 @@
-"""``gerotor-twin`` subcommands of the offline part: ``synth-bench``, ``report``, ``run-bag``, ``replay``.
+"""``gerotor-twin synth-bench``: a synthetic bench recording (emulated pump + sensors) to MCAP.
 
-:func:`register` adds them to the project's argparse sub-parsers (one call in
-``cli.py``).  Handlers import their modules lazily, so ``gerotor-twin --help``
-stays fast and only ``replay`` needs rclpy.  Bad input raises
-:class:`~gerotor_twin.errors.InputError` (printed as one line, exit 2);
-unreadable MCAP files raise :class:`~gerotor_twin.io.McapReadError`, turned
-into the same one-line form here.
+:func:`add_parser` adds it to the project's sub-parsers (``cli.py`` lists every
+command's module); the handler imports the emulator lazily.  Bad input raises
+:class:`~gerotor_twin.errors.InputError` (printed as one line, exit 2).
 """
 from __future__ import annotations
 
@@ -16,13 +13,7 @@ from pathlib import Path
 
 from gerotor_twin.errors import InputError
 
-__all__ = ["register"]
-
-
-def _as_input_error(exc: Exception) -> InputError:
-    path = getattr(exc, "path", "input")
-    what = getattr(exc, "what", str(exc))
-    return InputError(str(path), "(file)", "a readable ROS 2 MCAP file with the needed topics", what)
+__all__ = ["add_parser"]
 
 
 def cmd_synth_bench(args) -> int:
@@ -62,7 +53,7 @@ def cmd_synth_bench(args) -> int:
     return 0
 
 
-def _add_synth(sub) -> None:
+def add_parser(sub) -> None:
     p = sub.add_parser("synth-bench", help="synthetic bench recording (emulated pump + sensors) to MCAP",
                        description="Run the bench emulator (a pump that differs from the twin on purpose, "
                                    "seen through bench sensors) along a profile and record the bench "
@@ -82,17 +73,3 @@ def _add_synth(sub) -> None:
     p.add_argument("--json", metavar="F", help="write counts and the ground truth per plateau to F")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_synth_bench)
-
-
-def register(subparsers) -> None:
-    """Add ``synth-bench``, ``report``, ``run-bag`` and ``replay`` to an argparse sub-parser set."""
-    _add_synth(subparsers)
-    import importlib
-    for name in ("gerotor_twin.report.build", "gerotor_twin.offline.run_bag", "gerotor_twin.ros.replay"):
-        try:
-            mod = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != name:    # a missing dependency is a real error; only a missing module is skipped
-                raise
-            continue
-        mod.add_parser(subparsers)
