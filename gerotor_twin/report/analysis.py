@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..units import P_ATM, pa_abs_to_bar_gauge, rad_s_to_rpm
 from .data import BenchData, TwinData
 
 __all__ = ["Grid", "Plateau", "make_grid", "find_plateaus", "error_stats", "compare"]
@@ -90,15 +91,15 @@ def _smooth(v: np.ndarray, n: int) -> np.ndarray:
 
 
 def find_plateaus(grid: Grid, *, min_s: float = 1.5, settle_s: float = 1.0, speed_tol_rpm_s: float = 15.0,
-                  pressure_tol_bar_s: float = 0.3, smooth_s: float = 0.5) -> list[Plateau]:
-    """Steady stretches of the bench's speed and delivery pressure (see module doc)."""
+                  pressure_tol_bar_s: float = 0.3, smooth_s: float = 0.5, p_atm: float = P_ATM) -> list[Plateau]:
+    """Steady stretches of the bench's speed and delivery pressure (see module doc); gauge zero ``p_atm`` [Pa]."""
     t = grid.t
     if t.size < 3:
         return []
     dt = t[1] - t[0]
     n = max(1, int(round(smooth_s / dt)))
-    rpm = _smooth(grid.omega * 30 / math.pi, n)
-    bar = _smooth((grid.p_delivery - 101325.0) / 1e5, n)
+    rpm = _smooth(rad_s_to_rpm(grid.omega), n)
+    bar = _smooth(pa_abs_to_bar_gauge(grid.p_delivery, p_atm), n)
     drpm = np.abs(np.gradient(rpm, dt))
     dbar = np.abs(np.gradient(bar, dt))
     steady = (drpm < speed_tol_rpm_s) & (dbar < pressure_tol_bar_s)
@@ -114,8 +115,8 @@ def find_plateaus(grid: Grid, *, min_s: float = 1.5, settle_s: float = 1.0, spee
         a = i + int(round(settle_s / dt))
         b = j - 1
         if (b - a) * dt >= min_s:
-            w = grid.omega[a:b] * 30 / math.pi
-            p = (grid.p_delivery[a:b] - 101325.0) / 1e5
+            w = rad_s_to_rpm(grid.omega[a:b])
+            p = pa_abs_to_bar_gauge(grid.p_delivery[a:b], p_atm)
             out.append(Plateau(len(out) + 1, a, b, float(t[a] - dt / 2), float(t[b - 1] + dt / 2),
                                float(np.mean(w)), float(np.mean(p))))
         i = j

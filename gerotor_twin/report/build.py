@@ -70,8 +70,8 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
         seen[tw.label] = i
     span = overlap(bench, twins)
     grid = make_grid(bench, span)
-    plateaus = find_plateaus(grid)
     cfg = pump_config(twins[0])
+    plateaus = find_plateaus(grid, p_atm=cfg.fluid.atmospheric_pa)
     disp = cfg.gears.displacement_closed_form()
     comps = [compare(grid, plateaus, tw, disp) for tw in twins]
     chosen = F.choose_plateaus(plateaus)

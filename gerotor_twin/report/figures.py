@@ -14,6 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..units import P_ATM  # noqa: E402
 from .analysis import Grid, Plateau, revolution_phase  # noqa: E402
 from .data import BenchData, TwinData  # noqa: E402
 
@@ -21,7 +22,6 @@ __all__ = ["fig_operating", "fig_flow", "fig_efficiency_map", "fig_waveforms", "
            "fig_gaps", "choose_plateaus", "gap_profile"]
 
 LPM = 6e4          # m³/s -> L/min
-P_ATM = 101325.0
 _STYLES = ("-", "--", ":", "-.")
 _COLORS = ("tab:red", "tab:green", "tab:purple", "tab:brown")
 

@@ -35,6 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gerotor_twin.units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
+
 __all__ = ["run", "main", "topic_bytes"]
 
 _INPUTS = ("shaft_speed", "delivery_pressure")      # the bench's two required inputs
@@ -75,7 +77,7 @@ def _publish(domain: int, rpm: float, rate: float, seconds: float, proc, kinds=_
             if proc.poll() is not None or time.monotonic() > deadline:
                 raise RuntimeError("twin_node did not subscribe (see node.txt)")
             time.sleep(0.05)
-        w, pd, ps = rpm * math.pi / 30, 101325.0 + 20e5, 101325.0
+        w, pd, ps = rpm_to_rad_s(rpm), bar_gauge_to_pa_abs(20.0), P_ATM
         rng = np.random.default_rng(0)      # sensor noise, as on a bench: values do not compress away
         t0 = time.monotonic()
         k = 0

@@ -23,6 +23,8 @@ import math
 import sys
 import time
 
+from gerotor_twin.units import bar_gauge_to_pa_abs, rpm_to_rad_s
+
 __all__ = ["main"]
 
 
@@ -73,7 +75,7 @@ def main(argv=None) -> int:
             time.sleep(0.02)
         time.sleep(a.settle)
         print("publishing", flush=True)
-        w, pd = a.rpm * math.pi / 30.0, 101325.0 + a.bar * 1e5
+        w, pd = rpm_to_rad_s(a.rpm), bar_gauge_to_pa_abs(a.bar)
         period = int(round(1e9 / a.rate))
         n = int(round(a.seconds * a.rate))
         stamps, late = [], 0
