@@ -1,4 +1,4 @@
-"""The pump model: state, inputs and the one stepping entry point ``advance``.
+"""The pump model: the one stepping entry point ``advance`` (inputs, state, outputs in :mod:`.records`).
 
 ``advance(state, t_span, inputs) -> (state, outputs)`` is used by the CLI, the
 node and the offline runs alike.  Inputs (shaft speed, suction and delivery
@@ -9,114 +9,24 @@ Pa (absolute), m, m³/s, s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..bearing.registry import MODEL_NAMES, make_bearing
 from ..bearing.geometry import BearingGeometry
 from ..config import PumpConfig
-from ..errors import InputError, check_finite
+from ..errors import InputError
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
 from ..hydraulics.state_equation import log_density_of
 from . import kernel as K
+from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
-from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, N_FLOWS, kernel_model, operating, workspace
+from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, kernel_model, operating, workspace
 
 __all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
 
 BEARING_MODELS = MODEL_NAMES      #: the outer-gear models, by name (one list: bearing.registry)
-
-
-@dataclass(frozen=True)
-class Inputs:
-    """Operating inputs held over one ``advance`` call.
-
-    Parameters
-    ----------
-    omega : float
-        Shaft speed [rad/s], ≥ 0.
-    p_suction : float
-        Suction pressure, absolute [Pa].
-    p_delivery : float
-        Delivery pressure, absolute [Pa] (ignored in ``restriction`` mode,
-        where the delivery pressure is a state).
-    """
-    omega: float
-    p_suction: float
-    p_delivery: float
-
-
-@dataclass(frozen=True)
-class PumpState:
-    """Everything ``advance`` carries from one call to the next."""
-    t: float                    #: time [s]
-    theta: float                #: shaft angle [rad] (unwrapped)
-    log_density: np.ndarray     #: (N+1,) ln(ρ/ρ₀) of the chambers and the delivery volume [-]
-    pressures: np.ndarray       #: (N+1,) the matching absolute pressures [Pa] (derived, for callers)
-    eccentricity: np.ndarray    #: (2,) outer-gear centre displacement [m]
-    counters: np.ndarray = field(default_factory=lambda: np.zeros(K.N_COUNTERS, dtype=np.int64))
-    volumes: np.ndarray = field(default_factory=lambda: np.zeros(N_FLOWS))  #: ∫ flow dt per FL_* index [m³]
-    swept_angle: float = 0.0    #: ∫ω dt since start [rad]
-    substep: float = 0.0        #: proposed ROS2 sub-step for the next call [s] (0: the output step)
-
-    @property
-    def counts(self) -> dict:
-        """Solver steps and events so far."""
-        c = self.counters
-        return {"steps": int(c[K.C_STEPS]), "cavitation_clamps": int(c[K.C_CAVITATION]),
-                "contact_unloaded": int(c[K.C_CONTACT_UNLOADED]),
-                "housing_contact": int(c[K.C_HOUSING_CONTACT]),
-                "gear_contact_corrections": int(c[K.C_GEAR_CONTACT]),
-                "substeps": int(c[K.C_SUBSTEPS]), "rejected_substeps": int(c[K.C_REJECTED]),
-                "solver_failures": int(c[K.C_FAILED])}
-
-
-@dataclass(frozen=True)
-class Outputs:
-    """Per-step outputs of one ``advance`` call (row i is the state after step i)."""
-    t: np.ndarray                   #: time [s]
-    theta: np.ndarray               #: shaft angle [rad]
-    chamber_pressures: np.ndarray   #: (n, N) [Pa]
-    delivery_pressure: np.ndarray   #: [Pa]
-    delivery_flow: np.ndarray       #: net flow out of the delivery port [m³/s]
-    suction_flow: np.ndarray        #: flow in through the suction port [m³/s]
-    leak_suction_delivery: np.ndarray  #: [m³/s]
-    leak_drain: np.ndarray          #: [m³/s]
-    restriction_flow: np.ndarray    #: flow through the delivery restriction [m³/s]
-    eccentricity: np.ndarray        #: (n, 2) outer-gear displacement [m]
-    load: np.ndarray                #: (n, 2) load on the outer gear F_est [N]
-    gaps: np.ndarray                #: (n, N) tooth-tip gap heights [m]
-    inner_rotation: np.ndarray      #: γ [rad]
-    contact_lobe: np.ndarray        #: index of the lobe in contact
-    theoretical_flow: float         #: displacement × speed [m³/s]
-    volumetric_efficiency: float    #: mean delivered / theoretical over this call [-]
-    port_mass_in: float = 0.0       #: mass through the suction ports over this call / ρ₀ [m³]
-    port_mass_out: float = 0.0      #: mass through the delivery ports over this call / ρ₀ [m³]
-
-    def __len__(self) -> int:
-        return self.t.size
-
-    def at(self, times) -> dict:
-        """Outputs at requested times [s] (linear interpolation between steps).
-
-        Returns a dict of arrays keyed like the fields (per-chamber fields get
-        shape (len(times), N)).  Times outside the call's span are an error.
-        """
-        t = np.atleast_1d(np.asarray(times, dtype=float))
-        if self.t.size == 0 or t.min() < self.t[0] - 1e-12 or t.max() > self.t[-1] + 1e-12:
-            raise InputError("times", [float(t.min()), float(t.max())],
-                             f"[{self.t[0] if self.t.size else 0:g}, {self.t[-1] if self.t.size else 0:g}] s")
-        out = {}
-        for name in ("theta", "delivery_pressure", "delivery_flow", "suction_flow", "leak_suction_delivery",
-                     "leak_drain", "restriction_flow", "inner_rotation"):
-            out[name] = np.interp(t, self.t, getattr(self, name))
-        for name in ("chamber_pressures", "eccentricity", "load", "gaps"):
-            v = getattr(self, name)
-            out[name] = np.column_stack([np.interp(t, self.t, v[:, k]) for k in range(v.shape[1])])
-        out["t"] = t
-        return out
 
 
 class PumpModel:
@@ -164,21 +74,8 @@ class PumpModel:
 
     # ---------------------------------------------------------------- inputs
     def check_inputs(self, inputs: Inputs) -> Inputs:
-        """Validate inputs against the documented envelope; raise :class:`InputError`."""
-        rng, p_atm = self.config.range, self.config.fluid.atmospheric_pa
-        w = check_finite("shaft_speed", inputs.omega)
-        wmax = rng.max_speed_rpm * 2 * math.pi / 60
-        if not 0.0 <= w <= wmax * 1.0001:
-            raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{rng.max_speed_rpm:g} rpm)")
-        ps = check_finite("suction_pressure", inputs.p_suction)
-        if not 1e4 <= ps <= 5e5:
-            raise InputError("suction_pressure", ps, "[10000, 500000] Pa absolute")
-        pd = check_finite("delivery_pressure", inputs.p_delivery)
-        pmax = p_atm + rng.max_delivery_bar * 1e5
-        if not (self.restriction_mode or ps - 0.5e5 <= pd <= pmax * 1.0001):
-            raise InputError("delivery_pressure", pd,
-                             f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (0–{rng.max_delivery_bar:g} bar gauge)")
-        return Inputs(w, ps, pd)
+        """Validate inputs against the documented envelope; raise :class:`InputError` (see :func:`check_inputs`)."""
+        return check_inputs(self.config, inputs)
 
     # ---------------------------------------------------------------- state
     def initial_state(self, inputs: Inputs, theta: float = 0.0, t: float = 0.0) -> PumpState:
