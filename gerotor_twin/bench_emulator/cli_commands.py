@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from gerotor_twin.errors import InputError
+from gerotor_twin.units import m3s_to_lpm
 
 __all__ = ["add_parser"]
 
@@ -46,7 +47,7 @@ def cmd_synth_bench(args) -> int:
           f"seed {spec.seed})")
     for row in res["truth"]:
         print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar: mean flow "
-              f"{row['true_mean_flow_m3s'] * 6e4:7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}")
+              f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}")
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=2))
         print(f"wrote {args.json}")

@@ -34,6 +34,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.io import McapLog
 from gerotor_twin.io import messages as m
 from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
+from gerotor_twin.units import rpm_to_rad_s
 
 from .profiles import Profile
 from .sensors import BenchSpec, Encoder, FirstOrderLag, noise_streams
@@ -128,7 +129,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     t_grid = np.arange(n_ticks + 1) * dt
     sp_w, sp_p = profile.setpoints(t_grid)
     p_atm = cfg.fluid.atmospheric_pa
-    w_max = cfg.range.max_speed_rpm * math.pi / 30
+    w_max = rpm_to_rad_s(cfg.range.max_speed_rpm)
     rng = noise_streams(spec.seed, ("speed", "pressure", "suction", "flow", "temperature", "latency"))
 
     def suction(w: float) -> float:

@@ -28,6 +28,7 @@ import numpy as np
 
 from .pump import PumpModel
 from .steady import reference_config, run_steady
+from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
 __all__ = ["accuracy", "compare", "Revolution", "reference_revolution", "print_accuracy", "within_budget",
            "reference_numerics", "BUDGET"]
@@ -45,7 +46,7 @@ def reference_numerics(cfg, rpm: float, tolerance: float = REFERENCE_TOLERANCE,
     """The same pump with tight numerics at ``rpm``: an output step ``refinement`` times finer
     than the default's there (so the samples coincide), log-density error control at ``tolerance``."""
     n = cfg.numerics
-    h_deg = min(n.max_step_deg, math.degrees(n.max_step_s * rpm * math.pi / 30))
+    h_deg = min(n.max_step_deg, math.degrees(n.max_step_s * rpm_to_rad_s(rpm)))
     steps = math.ceil(360.0 / h_deg - 1e-9)                 # default output steps per revolution
     return reference_config(cfg, tolerance=tolerance, max_step_deg=360.0 / (steps * refinement), max_step_s=1e-2)
 
@@ -53,8 +54,8 @@ def reference_numerics(cfg, rpm: float, tolerance: float = REFERENCE_TOLERANCE,
 def _rtf(model: PumpModel, state, rpm: float, bar: float, revolutions: int) -> tuple[float, float]:
     """(real-time factor, accepted ROS2 sub-steps per revolution) over ``revolutions`` from ``state``."""
     from .pump import Inputs
-    inp = Inputs(rpm * math.pi / 30, model.config.boundary.suction_pressure_pa,
-                 model.config.fluid.atmospheric_pa + bar * 1e5)
+    inp = Inputs(rpm_to_rad_s(rpm), model.config.boundary.suction_pressure_pa,
+                 bar_gauge_to_pa_abs(bar, model.config.fluid.atmospheric_pa))
     span = revolutions * 60.0 / rpm
     t0 = time.perf_counter()
     new, _ = model.advance(state, span, inp)
@@ -163,7 +164,7 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
     row = {"rpm": rpm, "bar": bar, "model": model,
            "numerics": {k: getattr(cfg.numerics, k) for k in ("max_step_deg", "tolerance", "error_measure",
                                                                "log_density_tolerance")}}
-    row.update(compare(Revolution.of(res), ref, ps, cfg.fluid.atmospheric_pa + bar * 1e5))
+    row.update(compare(Revolution.of(res), ref, ps, bar_gauge_to_pa_abs(bar, cfg.fluid.atmospheric_pa)))
     row["rtf"], row["substeps_per_revolution"] = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)
     return row
 

@@ -7,6 +7,7 @@ import time
 
 from ..bearing.registry import MODEL_NAMES
 from .pump import Inputs, PumpModel
+from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
 __all__ = ["realtime", "models_cost"]
 
@@ -24,8 +25,8 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
     for name in models:
         m = PumpModel(config, name)
         for rpm in speeds:
-            inp = Inputs(rpm * math.pi / 30, config.boundary.suction_pressure_pa,
-                         config.fluid.atmospheric_pa + bar * 1e5)
+            inp = Inputs(rpm_to_rad_s(rpm), config.boundary.suction_pressure_pa,
+                         bar_gauge_to_pa_abs(bar, config.fluid.atmospheric_pa))
             s, _ = m.advance(m.initial_state(inp), 0.1, inp)     # warm-up (JIT, transient)
             walls, cpus = [], []
             for _ in range(repeats):
@@ -60,8 +61,8 @@ def models_cost(config, models=MODEL_NAMES, speeds=(1000, 3000), bar=27.5,
     for name in models:
         m = PumpModel(config, name)
         for rpm in speeds:
-            inp = Inputs(rpm * math.pi / 30, config.boundary.suction_pressure_pa,
-                         config.fluid.atmospheric_pa + bar * 1e5)
+            inp = Inputs(rpm_to_rad_s(rpm), config.boundary.suction_pressure_pa,
+                         bar_gauge_to_pa_abs(bar, config.fluid.atmospheric_pa))
             period = 2 * math.pi / inp.omega
             s, _ = m.advance(warm[rpm], m.step_size(inp.omega), inp)      # JIT / first-call warm-up
             t0 = time.perf_counter()

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..config import PumpConfig
 from ..errors import InputError, check_finite
-from ..units import rpm_to_rad_s
+from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 from . import kernel as K
 from .params import N_FLOWS
 
@@ -121,7 +121,7 @@ def check_inputs(config: PumpConfig, inputs: Inputs) -> Inputs:
     if not 1e4 <= ps <= 5e5:
         raise InputError("suction_pressure", ps, "[10000, 500000] Pa absolute")
     pd = check_finite("delivery_pressure", inputs.p_delivery)
-    pmax = p_atm + rng.max_delivery_bar * 1e5
+    pmax = bar_gauge_to_pa_abs(rng.max_delivery_bar, p_atm)
     if not (config.boundary.mode == "restriction" or ps - 0.5e5 <= pd <= pmax * 1.0001):
         raise InputError("delivery_pressure", pd,
                          f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (0–{rng.max_delivery_bar:g} bar gauge)")

@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..units import P_ATM  # noqa: E402
+from ..units import P_ATM, pa_abs_to_bar_gauge, rad_s_to_rpm  # noqa: E402
 from .analysis import Grid, Plateau, revolution_phase  # noqa: E402
 from .data import BenchData, TwinData  # noqa: E402
 
@@ -60,13 +60,13 @@ def fig_operating(bench: BenchData, grid: Grid, plateaus: list[Plateau]) -> byte
     """Shaft speed and delivery pressure over time, plateaus shaded and numbered."""
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 4.6), sharex=True)
     t, w = bench.speed
-    a1.plot(t, w * 30 / math.pi, lw=0.6, color="tab:blue", label="bench (raw)")
-    a1.plot(grid.t, grid.omega * 30 / math.pi, lw=1.2, color="k", label=f"{grid.t[1] - grid.t[0]:g} s mean")
+    a1.plot(t, rad_s_to_rpm(w), lw=0.6, color="tab:blue", label="bench (raw)")
+    a1.plot(grid.t, rad_s_to_rpm(grid.omega), lw=1.2, color="k", label=f"{grid.t[1] - grid.t[0]:g} s mean")
     a1.set_ylabel("speed [rpm]")
     a1.legend(loc="lower right", fontsize=8)
     t, p = bench.delivery_pressure
-    a2.plot(t, (p - P_ATM) / 1e5, lw=0.4, color="tab:orange", label="bench (raw)")
-    a2.plot(grid.t, (grid.p_delivery - P_ATM) / 1e5, lw=1.2, color="k", label="grid mean")
+    a2.plot(t, pa_abs_to_bar_gauge(p, P_ATM), lw=0.4, color="tab:orange", label="bench (raw)")
+    a2.plot(grid.t, pa_abs_to_bar_gauge(grid.p_delivery, P_ATM), lw=1.2, color="k", label="grid mean")
     a2.set_ylabel("delivery p [bar g]")
     a2.set_xlabel("time [s]")
     _shade(a1, plateaus, labels=True)
@@ -142,7 +142,7 @@ def fig_waveforms(twins: list[TwinData], chosen: list[Plateau]) -> bytes | None:
             if k is None:
                 continue
             tab = w[k]
-            ax.plot(np.degrees(tab[:, 0]), (tab[:, 1] - P_ATM) / 1e5, _STYLES[i % 4], color=_COLORS[i % 4],
+            ax.plot(np.degrees(tab[:, 0]), pa_abs_to_bar_gauge(tab[:, 1], P_ATM), _STYLES[i % 4], color=_COLORS[i % 4],
                     lw=1.0, label=tw.label)
         ax.set_title(f"#{p.index}: {p.rpm:.0f} rpm, {p.bar:.1f} bar", fontsize=9)
         ax.set_xlabel("shaft angle [deg]")

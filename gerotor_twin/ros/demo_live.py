@@ -24,6 +24,8 @@ import threading
 import time
 from pathlib import Path
 
+from gerotor_twin.units import m3s_to_lpm
+
 ROOT = Path(__file__).resolve().parent.parent.parent
 
 __all__ = ["main"]
@@ -110,8 +112,8 @@ def main(argv=None) -> int:
     for p, row in zip(res["plateaus"], res["twins"][0]["plateaus"]):
         fm, fp = row["flow_measured_m3s"], row["flow_predicted_m3s"]
         em, ep = row["eta_measured"], row["eta_predicted"]
-        print(f"  plateau {p['index']}: {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar  flow meas {fm * 6e4:6.2f} "
-              f"pred {'–' if fp is None else f'{fp * 6e4:6.2f}'} L/min  eta_v meas {100 * em:5.2f} % "
+        print(f"  plateau {p['index']}: {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar  flow meas {m3s_to_lpm(fm):6.2f} "
+              f"pred {'–' if fp is None else f'{m3s_to_lpm(fp):6.2f}'} L/min  eta_v meas {100 * em:5.2f} % "
               f"pred {'–' if ep is None else f'{100 * ep:5.2f}'} %")
     for h in res["headline"]:
         print(f"demo: {h}")
