@@ -115,3 +115,16 @@ def test_readme_links_every_doc():
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     missing = [p.name for p in sorted((ROOT / "docs").glob("*.md")) if f"(docs/{p.name}" not in readme]
     assert missing == []
+
+
+def test_node_parameter_table_names_every_parameter():
+    """docs/node.md's parameter table names every parameter twin_node declares, and no other (behaviour)."""
+    from gerotor_twin.ros.params import PARAMETERS
+
+    text = (ROOT / "docs" / "node.md").read_text(encoding="utf-8")
+    section = text.split("\n### Parameters\n", 1)[1].split("\n### ", 1)[0]
+    first_cells = [row.split("|")[1] for row in section.splitlines() if row.startswith("| `")]
+    tabled = {name for cell in first_cells for name in re.findall(r"`([a-z_]+)`", cell)}
+    declared = {p.name for p in PARAMETERS}
+    assert declared - tabled == set(), "parameters missing from the table"
+    assert tabled - declared == set(), "table rows naming no declared parameter"
