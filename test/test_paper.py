@@ -134,7 +134,7 @@ def test_pressure_changes_the_tooth_gap_more_at_high_speed(cfg):
 
 @pytest.mark.xfail(strict=True, reason="not reproduced: with the calibrated clearances the tooth-tip gaps carry "
                    "a few % of the leakage and the outer gear rests on the inner gear, so micro-motion changes "
-                   "η by < 0.2 pt (README, 'Section 4')")
+                   "η by < 0.2 pt (docs/paper.md, 'Section 4')")
 def test_micro_motion_raises_volumetric_efficiency(tables):
     """Tables 3–5: MM above fixed by 1.35–2.6 pt at every point; we ask for ≥ 0.5 pt."""
     by = {(p["model"], p["rpm"], p["bar"]): p["volumetric_efficiency"] for p in tables["points"]}
@@ -143,7 +143,7 @@ def test_micro_motion_raises_volumetric_efficiency(tables):
             assert by[("mobility", n, p)] - by[("fixed", n, p)] > 0.005
 
 
-@pytest.mark.xfail(strict=True, reason="not reproduced: see README, 'Section 4'")
+@pytest.mark.xfail(strict=True, reason="not reproduced: see docs/paper.md, 'Section 4'")
 def test_fixed_centre_has_the_deeper_depression(section4):
     """Fig. 14: near the delivery-to-suction transition the fixed-centre chamber pressure
     dips lower than with micro-motion."""
