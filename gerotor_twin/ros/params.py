@@ -1,6 +1,6 @@
 """Parameters of ``twin_node``: names, defaults, units, ranges; validation of every value given.
 
-:data:`PARAMETERS` is plain data (no rclpy), so the README table, the MCAP
+:data:`PARAMETERS` is plain data (no rclpy), so the parameter table of docs/node.md, the MCAP
 metadata and the node share one definition.
 
 Validation (:func:`check_overrides`, no rclpy): every value given to the node
@@ -137,7 +137,7 @@ def check_value(name: str, value: Any, source: str = "") -> Any:
     if spec is None and name not in BUILTIN:
         known = [p.name for p in PARAMETERS] + list(BUILTIN)
         close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-        hint = f"did you mean {' or '.join(close)}?" if close else "see `ros2 param list` / README for the names"
+        hint = f"did you mean {' or '.join(close)}?" if close else "see `ros2 param list` / docs/node.md for the names"
         raise InputError(field, value, "a parameter of twin_node", f"unknown parameter; {hint}")
     kind = _kind(default)
     ok = {"bool": isinstance(value, bool),
