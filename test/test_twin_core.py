@@ -257,7 +257,7 @@ def test_burst_of_samples_is_bounded(model):
     for k in range(10_000):
         core.add_sample("shaft_speed", W, 50 * MS + k, 50 * MS + k)
     assert core.input_report(0)["shaft_speed"]["accepted"] >= 10_000
-    assert len(core._channels["shaft_speed"].cells) <= 5               # one entry per grid cell
+    assert len(core.book.channels["shaft_speed"].cells) <= 5               # one entry per grid cell
     msgs = run(core, 51, 100)
     assert of(msgs, "twin/delivery_flow")
 

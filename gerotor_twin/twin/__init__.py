@@ -20,9 +20,16 @@ Example (offline: the same calls the node makes)::
 ==================  =======================================================
 module              content
 ==================  =======================================================
-``core``            :class:`TwinCore`, :class:`TickResult`: input validation,
-                    clock-driven advance, lag / bad-input policy (documented
-                    in its module docstring)
+``core``            :class:`TwinCore`, :class:`TickResult`: the façade the node
+                    and run-bag call; the lag / bad-input policy (documented
+                    in its module docstring); reporting (snapshot, diagnostics)
+``input_book``      :class:`InputBook`: channels, validation, stamp guard,
+                    sources, sequence gaps, input report
+``clock_driver``    :class:`ClockDriver`: the model state advanced cell by cell
+                    to the clock (hold, skip, reset, instantaneous outputs)
+``revolution``      :class:`RevolutionRecorder`, :class:`Revolution`: flow
+                    summary and waveform of each completed revolution
+``events``          :class:`EventLog`: rate-limited ``(level, text)`` events
 ``settings``        :class:`TwinSettings` (sample grid, publish period, lag,
                     staleness, filtering, waveform)
 ``inputs``          :data:`INPUTS` (kinds, default topics, types, units),

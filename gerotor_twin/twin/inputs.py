@@ -117,7 +117,7 @@ def sample_from_message(kind: str, msg: Any) -> tuple[float, int | None]:
 class InputChannel:
     """Accepted samples of one input on the sample grid, stamp order and counters.
 
-    Not thread-safe by itself; :class:`~gerotor_twin.twin.core.TwinCore` locks.
+    Not thread-safe by itself; :class:`~gerotor_twin.twin.input_book.InputBook` locks.
     """
 
     def __init__(self, spec: InputSpec, sample_ns: int, tau_s: float, guard: StampGuard | None = None):
