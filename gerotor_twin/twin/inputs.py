@@ -135,10 +135,6 @@ class InputChannel:
         self.last_error: str = ""
 
     @property
-    def rejected_total(self) -> int:
-        return sum(self.rejected.values())
-
-    @property
     def last_stamp(self) -> int | None:
         """Last accepted header stamp [ns]; setting None forgets the stamp order and offset."""
         return self.guard.last_stamp
