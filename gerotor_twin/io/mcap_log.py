@@ -46,7 +46,7 @@ from gerotor_twin.io.schemas import SCHEMA_ENCODING, message_definition, normali
 
 __all__ = [
     "PROFILE", "MESSAGE_ENCODING", "LIBRARY", "COMPRESSIONS",
-    "PUMP_CONFIG_METADATA", "NODE_PARAMETERS_METADATA",
+    "PUMP_CONFIG_METADATA", "NODE_PARAMETERS_METADATA", "twin_log_metadata",
     "McapLogClosed", "McapLog", "RotatingMcapLog",
 ]
 
@@ -54,6 +54,22 @@ __all__ = [
 #: pump configuration, one key per parameter with its value as text for the node).
 PUMP_CONFIG_METADATA = "gerotor_twin.pump_config"
 NODE_PARAMETERS_METADATA = "gerotor_twin.node_parameters"
+
+
+
+def twin_log_metadata(config_yaml: str, config_source: str, parameters: dict,
+                      extra: dict[str, dict] | None = None) -> dict[str, dict[str, str]]:
+    """The Metadata records of every twin log, the node's and run-bag's alike.
+
+    ``gerotor_twin.pump_config``: the pump YAML text and where it came from;
+    ``gerotor_twin.node_parameters``: one key per parameter, the value as text
+    (strings quoted, as ``repr``); ``extra``: further records by name.
+    """
+    meta = {PUMP_CONFIG_METADATA: {"yaml": config_yaml, "path": str(config_source)},
+            NODE_PARAMETERS_METADATA: {k: repr(v) if isinstance(v, str) else str(v) for k, v in parameters.items()}}
+    meta.update(extra or {})
+    return meta
+
 
 PROFILE = "ros2"
 MESSAGE_ENCODING = "cdr"

@@ -25,7 +25,7 @@ import yaml
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError, one_line
 from gerotor_twin.io import McapLog, McapReadError, open_mcap
-from gerotor_twin.io.mcap_log import NODE_PARAMETERS_METADATA, PUMP_CONFIG_METADATA
+from gerotor_twin.io.mcap_log import twin_log_metadata
 from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
 from gerotor_twin.twin.core import TwinCore
 from gerotor_twin.twin.inputs import INPUTS
@@ -129,9 +129,8 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
     cfg_text = Path(cfg.source).read_text() if Path(str(cfg.source)).is_file() else yaml.safe_dump(cfg.to_dict())
     params = {"bearing_model": model, "pump_config": str(cfg.source), "source_bag": str(f.path),
               **{k: repr(v) for k, v in settings.as_dict().items()}}
-    log = McapLog(output, overwrite=overwrite, metadata={
-        PUMP_CONFIG_METADATA: {"yaml": cfg_text}, NODE_PARAMETERS_METADATA: params,
-        RUN_BAG_METADATA: {"model": model, "bag": str(f.path)}})
+    log = McapLog(output, overwrite=overwrite, metadata=twin_log_metadata(
+        cfg_text, str(cfg.source), params, {RUN_BAG_METADATA: {"model": model, "bag": str(f.path)}}))
     for topic, msgtype, qos in log_topics({name: f.topic_types()[name] for name in kinds}):
         log.add_topic(topic, msgtype, qos=qos)
     t_first, t_last = rows[0][0], rows[-1][0]

@@ -178,11 +178,9 @@ class TwinNode(Node):
         self.log = self.log_files.open(log_topics(inputs, self.fq, self.log_files.logged))
 
     def _log_metadata(self) -> dict:
-        from gerotor_twin.io.mcap_log import PUMP_CONFIG_METADATA
-        return {PUMP_CONFIG_METADATA: {"yaml": self.config_text, "path": str(self.config.source)},
-                "gerotor_twin.node_parameters": {k: repr(v) if isinstance(v, str) else str(v)
-                                                 for k, v in P.values(self).items()},
-                "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}}
+        from gerotor_twin.io.mcap_log import twin_log_metadata
+        return twin_log_metadata(self.config_text, str(self.config.source), P.values(self), {
+            "gerotor_twin.twin_settings": {k: str(v) for k, v in self.settings.as_dict().items()}})
 
     def _clock_valid(self, now_ns: int) -> bool:
         """False before the node clock is valid (use_sim_time and no /clock yet: time 0)."""
