@@ -109,7 +109,10 @@ def test_node_and_run_bag_agree(tmp_path):
     logs = tmp_path / "log"
     node = subprocess.Popen([sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
                              str(root / "config" / "twin.yaml"), "-p", "use_sim_time:=true", "-p", f"log_dir:={logs}",
-                             "-p", "bearing_model:=mobility"], cwd=root, env=env, stdout=subprocess.PIPE,
+                             "-p", "bearing_model:=mobility",
+                             # log every output, as run-bag does: the report must find the same data in both
+                             "-p", "log_outputs_every:=1", "-p", "log_waveform_every:=1",
+                             "-p", "log_diagnostics_every:=1"], cwd=root, env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
     lines, ready = [], threading.Event()
 
