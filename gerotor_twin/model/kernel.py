@@ -118,7 +118,7 @@ def _error_weights(km, op, ws):
             ws.wt[i] = 1.0 / pc.tolerance
 
 
-@njit
+@njit(inline="always")
 def _first_stage(y, th, km, op, ws, integrals):
     """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
 
@@ -170,7 +170,7 @@ def ros2_step(y, th, h, km, op, ws, integrals):
     return en
 
 
-@njit
+@njit(inline="always")
 def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     """Advance the pressures over one output step ``big_h`` [s] with adaptive ROS2 sub-steps.
 
@@ -218,7 +218,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     ws.ctrl[CT_SUBSTEP] = h
 
 
-@njit
+@njit(inline="always")
 def to_pressures(y, km, out):
     """Pressures [Pa] of the log-density state; returns how many volumes are cavitating."""
     cav = 0
@@ -258,7 +258,7 @@ def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
     return ex, ey, fx, fy
 
 
-@njit
+@njit(inline="always")
 def _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws):
     fl = ws.flows
     rec[n, R_T] = t
