@@ -16,7 +16,7 @@ from .geometry.gerotor import GerotorGeometry
 from .geometry.ports import Port
 from .hydraulics.fluid import Fluid
 
-__all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances",
+__all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances", "MicroMotion",
            "load_config", "default_config_path", "parse_config"]
 
 DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "pump.yaml"
@@ -92,6 +92,33 @@ class OperatingRange:
 
 ERROR_MEASURES = ("pressure", "log_density")
 
+FIXED_CENTRE_CONTACT_RULES = ("rotate", "none")
+CHAMBER_VOLUME_MODES = ("displaced", "nominal")
+
+
+@dataclass(frozen=True)
+class MicroMotion:
+    """How the outer-gear position enters the gear set (docs/bearing.md, "Contact and volumes").
+
+    ``fixed_centre_contact``: for the fixed-centre model only, ``rotate`` applies the
+    "no overlap" branch of sec. 3.7 of [1] (the inner gear is turned, ≈ 1.55 mrad here,
+    until one lobe touches: gaps ≈ 6 µm on the suction side, ≈ 56 µm on the delivery side
+    at δ = 31.4 µm) or ``none`` (gears at their nominal angles: every gap = δ).  Moving-gear
+    models always apply sec. 3.7 (the contact carries part of the load).
+    ``chamber_volumes``: ``displaced`` takes V and dV/dθ of the displaced outer gear (first
+    order in **e**, exact to O(|e|²)), ``nominal`` the centred gear set for every model (as in [1]).
+    """
+    fixed_centre_contact: str = "rotate"
+    chamber_volumes: str = "displaced"
+
+    def __post_init__(self):
+        if self.fixed_centre_contact not in FIXED_CENTRE_CONTACT_RULES:
+            raise InputError("micro_motion.fixed_centre_contact", self.fixed_centre_contact,
+                             " | ".join(FIXED_CENTRE_CONTACT_RULES))
+        if self.chamber_volumes not in CHAMBER_VOLUME_MODES:
+            raise InputError("micro_motion.chamber_volumes", self.chamber_volumes,
+                             " | ".join(CHAMBER_VOLUME_MODES))
+
 
 @dataclass(frozen=True)
 class Numerics:
@@ -138,6 +165,7 @@ class PumpConfig:
     range: OperatingRange
     numerics: Numerics
     source: str = "<memory>"
+    micro_motion: MicroMotion = MicroMotion()
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -158,6 +186,7 @@ class PumpConfig:
             "boundary": _asdict(self.boundary),
             "range": _asdict(self.range),
             "numerics": _asdict(self.numerics),
+            "micro_motion": _asdict(self.micro_motion),
         }
 
 
@@ -165,7 +194,8 @@ def _asdict(obj) -> dict:
     return {f.name: getattr(obj, f.name) for f in fields(obj)}
 
 
-_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics"}
+_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
+             "micro_motion"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -257,7 +287,14 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     _check_ports(ports["suction"], ports["delivery"])
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,
-                      boundary=boundary, range=rng, numerics=num, source=source)
+                      boundary=boundary, range=rng, numerics=num, source=source,
+                      micro_motion=_micro_motion(raw))
+
+
+def _micro_motion(raw: dict) -> MicroMotion:
+    """The optional ``micro_motion`` section (two choices, each a string)."""
+    sec = _section(raw, "micro_motion", {f.name for f in fields(MicroMotion)}, False)
+    return MicroMotion(**{k: v if isinstance(v, str) else repr(v) for k, v in sec.items()})
 
 
 def _check_ports(s: Port, d: Port) -> None:

@@ -49,6 +49,9 @@ class KernelTables(NamedTuple):
     period: float       #: chamber period Θ = 2πN/(N−1) [rad]
     shift: float        #: lead of chamber j+1 over chamber j, 2π/(N−1) [rad]
     scale: float        #: M/Θ, samples per radian [1/rad]
+    #: sec. 3.7 "no overlap" branch: turn the inner gear until one lobe touches (False: the gears keep
+    #: their nominal angles; the fixed-centre model with ``micro_motion.fixed_centre_contact: none``)
+    turn_inner: bool = True
 
 
 class PumpConstants(NamedTuple):
