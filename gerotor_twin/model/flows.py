@@ -35,6 +35,7 @@ from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import orifice_flow
 from ..hydraulics.state_equation import bulk_modulus_of, state_of
 from .contact import column, locate
+from .volumes import displace_volumes
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY)
 
@@ -208,6 +209,7 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     n = km.pc.n
     chamber_geometry(theta, km.tab, n, ws.geo)
     volume_states(y, km, op, ws)
+    displace_volumes(theta, km.tab, n, ws.disp, ws.geo, ws.acc, G_V, G_DV)   # micro_motion.chamber_volumes
     for i in range(ws.flows.shape[0]):
         ws.flows[i] = 0.0
     if want_jac:

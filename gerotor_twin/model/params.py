@@ -52,6 +52,9 @@ class KernelTables(NamedTuple):
     #: sec. 3.7 "no overlap" branch: turn the inner gear until one lobe touches (False: the gears keep
     #: their nominal angles; the fixed-centre model with ``micro_motion.fixed_centre_contact: none``)
     turn_inner: bool = True
+    #: chamber volumes follow the outer gear (``micro_motion.chamber_volumes: displaced``,
+    #: :mod:`gerotor_twin.model.volumes`); False: volumes of the centred gear set
+    volumes_follow_gear: bool = True
 
 
 class PumpConstants(NamedTuple):
@@ -124,6 +127,8 @@ class Workspace(NamedTuple):
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
     ctrl: np.ndarray        #: (3,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s]
+    disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
+                            #: velocity of its last move [m/s] (:mod:`.volumes`)
 
 
 def _conductances(config: PumpConfig, lat: LateralGeometry) -> tuple[float, float, float]:
@@ -172,4 +177,5 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 6)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(3))
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(3),
+                     disp=v(4))
