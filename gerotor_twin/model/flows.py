@@ -140,6 +140,8 @@ def tip_flows(gaps, km, op, ws, jac, want_jac):
         if hk > 0.0:
             le = 2.0 * math.sqrt(2.0 * hk * pc.tip_dh / geo[j, G_KREL])       # osculating-circle length
             q, dq = tooth_tip_flow(p[jm] - p[j], hk, le, op.omega * geo[j, G_VR], pc.width, pc.viscosity)  # Eq. (22)
+            q *= pc.tip_flow_factor
+            dq *= pc.tip_flow_factor
         q += pc.g_lateral * (p[jm] - p[j])                                   # sec. 3.2
         dq += pc.g_lateral
         transfer(jm, j, q, dq, ws, jac, want_jac)

@@ -80,6 +80,7 @@ class PumpConstants(NamedTuple):
     tolerance: float            #: sub-step error tolerance (measure: ``error_measure``) [-]
     error_measure: int          #: ERROR_LOG_DENSITY or ERROR_PRESSURE
     log_density_tolerance: float  #: cap of the ln ρ error where β is small (ERROR_PRESSURE) [-]
+    tip_flow_factor: float = 1.0  #: multiplies the tooth-tip flow, Eq. (22) (0: tips sealed; what-if runs) [-]
 
 
 class KernelModel(NamedTuple):
