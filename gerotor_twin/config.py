@@ -48,13 +48,24 @@ class Clearances:
 
 @dataclass(frozen=True)
 class Orifice:
-    """Port orifice law: Cd(λ) = cd_max·tanh(2λ/λ_crit)."""
+    """Port orifice law (:mod:`gerotor_twin.hydraulics.orifice`).
+
+    ``law: flow_number`` (default): Cd(λ) = cd_max·tanh(2λ/λ_crit); ``law: merritt``: Merritt's
+    laminar (Cd = δ√Re, ``laminar_delta``) and turbulent (``cd_max``) orifice laws in series
+    (docs/paper.md, "Orifice law").
+    """
     cd_max: float = 0.7
     lambda_crit: float = 1000.0
+    law: str = "flow_number"
+    laminar_delta: float = 0.2
 
     def __post_init__(self):
+        from .hydraulics.orifice import ORIFICE_LAWS
         check_range("orifice.cd_max", self.cd_max, 0.0, 1.0, lo_open=True)
         check_range("orifice.lambda_crit", self.lambda_crit, 0.0, 1e6, lo_open=True)
+        if self.law not in ORIFICE_LAWS:
+            raise InputError("orifice.law", self.law, " | ".join(ORIFICE_LAWS))
+        check_range("orifice.laminar_delta", self.laminar_delta, 0.0, 1.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -269,9 +280,9 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
         ports[name] = Port(name, math.radians(a0), math.radians(a1))
     fk = {f.name for f in fields(Fluid)}
     fluid = Fluid(**{k: _num(_section(raw, "fluid", fk), "fluid", k) for k in _section(raw, "fluid", fk)})
-    ok = {"cd_max", "lambda_crit"}
-    orifice = Orifice(**{k: _num(_section(raw, "orifice", ok, False), "orifice", k)
-                         for k in _section(raw, "orifice", ok, False)})
+    ok = {"cd_max", "lambda_crit", "law", "laminar_delta"}
+    osec = _section(raw, "orifice", ok, False)
+    orifice = Orifice(**{k: (str(osec[k]) if k == "law" else _num(osec, "orifice", k)) for k in osec})
     ls = _section(raw, "leakage", {"tip_dh"}, False)
     tip_dh = check_range("leakage.tip_dh", _num(ls, "leakage", "tip_dh", 0.347), 0.0, 10.0, lo_open=True)
     bk = {"mode", "suction_pressure_pa", "delivery_volume_m3", "restriction_area_m2"}

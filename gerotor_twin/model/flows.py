@@ -32,7 +32,7 @@ import math
 from .._jit import njit
 from ..geometry.tables import AD, AS, DV, KREL, V, VR
 from ..hydraulics.gaps import tooth_tip_flow
-from ..hydraulics.orifice import orifice_flow
+from ..hydraulics.orifice import port_orifice_flow
 from ..hydraulics.state_equation import bulk_modulus_of, state_of
 from .contact import column, locate
 from .volumes import displace_volumes
@@ -110,14 +110,16 @@ def port_flows(km, op, ws, jac, want_jac):
     n = pc.n
     p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
     for j in range(n):
-        q, dq = orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        q, dq = port_orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
         r = op.rho_s / rho[j] if q > 0.0 else 1.0       # the suction port is a source at p_s, not a state
         acc[j] += r * q
         fl[FL_SUCTION] += q
         fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
         if want_jac:
             jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
-        q, dq = orifice_flow(p[n] - p[j], geo[j, G_AD], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        q, dq = port_orifice_flow(p[n] - p[j], geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
         fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
         fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
         transfer(n, j, q, dq, ws, jac, want_jac)
@@ -160,8 +162,8 @@ def line_flows(km, op, ws, jac, want_jac):
     ws.flows[FL_DRAIN] = q_dr
     ws.flows[FL_DELIVERY] -= q_sd + q_dr
     if pc.restriction:
-        q, dq = orifice_flow(ws.p[n] - pc.p_tank, pc.restriction_area, pc.cd_max, pc.lambda_crit, pc.density,
-                             pc.viscosity)
+        q, dq = port_orifice_flow(ws.p[n] - pc.p_tank, pc.restriction_area, pc.orifice_law, pc.cd_max,
+                                  pc.lambda_crit, pc.laminar_delta, pc.density, pc.viscosity)
         ws.acc[n] -= q
         ws.flows[FL_RESTRICTION] = q
         if want_jac:

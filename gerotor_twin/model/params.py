@@ -24,6 +24,7 @@ from ..config import PumpConfig
 from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
+from ..hydraulics.orifice import ORIFICE_LAWS
 from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
@@ -81,6 +82,8 @@ class PumpConstants(NamedTuple):
     error_measure: int          #: ERROR_LOG_DENSITY or ERROR_PRESSURE
     log_density_tolerance: float  #: cap of the ln ρ error where β is small (ERROR_PRESSURE) [-]
     tip_flow_factor: float = 1.0  #: multiplies the tooth-tip flow, Eq. (22) (0: tips sealed; what-if runs) [-]
+    orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
+    laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
 
 
 class KernelModel(NamedTuple):
@@ -158,7 +161,8 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction=config.boundary.mode == "restriction", line_volume=config.boundary.delivery_volume_m3,
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
-        log_density_tolerance=n.log_density_tolerance)
+        log_density_tolerance=n.log_density_tolerance,
+        orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta)
     return KernelModel(tab=tab, pc=pc, eos=state_equation(f))
 
 
