@@ -178,7 +178,7 @@ def add_parser(sub) -> None:
     c.add_argument("--config", help="pump YAML")
     c.add_argument("--valley", action="store_true",
                    help="instead of fitting: for each δ of --deltas refit the lateral clearance and print fit, "
-                        "loss split by path and MM − fixed (≈ 3 s per δ)")
+                        "loss split by path and MM − fixed (≈ 5–25 s per δ)")
     c.add_argument("--deltas", default=",".join(f"{d:g}" for d in DEFAULT_DELTAS_UM),
                    help="tooth-tip clearances of --valley [µm], comma-separated")
     c.add_argument("--json", help="--valley: write the table as JSON (docs/valley.json is the recorded one)")
