@@ -16,7 +16,7 @@ from .geometry.gerotor import GerotorGeometry
 from .geometry.ports import Port
 from .hydraulics.fluid import Fluid
 
-__all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances",
+__all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances", "MicroMotion",
            "load_config", "default_config_path", "parse_config"]
 
 DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "pump.yaml"
@@ -48,13 +48,24 @@ class Clearances:
 
 @dataclass(frozen=True)
 class Orifice:
-    """Port orifice law: Cd(λ) = cd_max·tanh(2λ/λ_crit)."""
+    """Port orifice law (:mod:`gerotor_twin.hydraulics.orifice`).
+
+    ``law: flow_number`` (default): Cd(λ) = cd_max·tanh(2λ/λ_crit); ``law: merritt``: Merritt's
+    laminar (Cd = δ√Re, ``laminar_delta``) and turbulent (``cd_max``) orifice laws in series
+    (docs/paper.md, "Orifice law").
+    """
     cd_max: float = 0.7
     lambda_crit: float = 1000.0
+    law: str = "flow_number"
+    laminar_delta: float = 0.2
 
     def __post_init__(self):
+        from .hydraulics.orifice import ORIFICE_LAWS
         check_range("orifice.cd_max", self.cd_max, 0.0, 1.0, lo_open=True)
         check_range("orifice.lambda_crit", self.lambda_crit, 0.0, 1e6, lo_open=True)
+        if self.law not in ORIFICE_LAWS:
+            raise InputError("orifice.law", self.law, " | ".join(ORIFICE_LAWS))
+        check_range("orifice.laminar_delta", self.laminar_delta, 0.0, 1.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -91,6 +102,33 @@ class OperatingRange:
 
 
 ERROR_MEASURES = ("pressure", "log_density")
+
+FIXED_CENTRE_CONTACT_RULES = ("rotate", "none")
+CHAMBER_VOLUME_MODES = ("displaced", "nominal")
+
+
+@dataclass(frozen=True)
+class MicroMotion:
+    """How the outer-gear position enters the gear set (docs/bearing.md, "Contact and volumes").
+
+    ``fixed_centre_contact``: for the fixed-centre model only, ``rotate`` applies the
+    "no overlap" branch of sec. 3.7 of [1] (the inner gear is turned, ≈ 1.55 mrad here,
+    until one lobe touches: gaps ≈ 6 µm on the suction side, ≈ 56 µm on the delivery side
+    at δ = 31.4 µm) or ``none`` (gears at their nominal angles: every gap = δ).  Moving-gear
+    models always apply sec. 3.7 (the contact carries part of the load).
+    ``chamber_volumes``: ``displaced`` takes V and dV/dθ of the displaced outer gear (first
+    order in **e**, exact to O(|e|²)), ``nominal`` the centred gear set for every model (as in [1]).
+    """
+    fixed_centre_contact: str = "rotate"
+    chamber_volumes: str = "displaced"
+
+    def __post_init__(self):
+        if self.fixed_centre_contact not in FIXED_CENTRE_CONTACT_RULES:
+            raise InputError("micro_motion.fixed_centre_contact", self.fixed_centre_contact,
+                             " | ".join(FIXED_CENTRE_CONTACT_RULES))
+        if self.chamber_volumes not in CHAMBER_VOLUME_MODES:
+            raise InputError("micro_motion.chamber_volumes", self.chamber_volumes,
+                             " | ".join(CHAMBER_VOLUME_MODES))
 
 
 @dataclass(frozen=True)
@@ -138,6 +176,7 @@ class PumpConfig:
     range: OperatingRange
     numerics: Numerics
     source: str = "<memory>"
+    micro_motion: MicroMotion = MicroMotion()
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -158,6 +197,7 @@ class PumpConfig:
             "boundary": _asdict(self.boundary),
             "range": _asdict(self.range),
             "numerics": _asdict(self.numerics),
+            "micro_motion": _asdict(self.micro_motion),
         }
 
 
@@ -165,7 +205,8 @@ def _asdict(obj) -> dict:
     return {f.name: getattr(obj, f.name) for f in fields(obj)}
 
 
-_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics"}
+_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
+             "micro_motion"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -239,9 +280,9 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
         ports[name] = Port(name, math.radians(a0), math.radians(a1))
     fk = {f.name for f in fields(Fluid)}
     fluid = Fluid(**{k: _num(_section(raw, "fluid", fk), "fluid", k) for k in _section(raw, "fluid", fk)})
-    ok = {"cd_max", "lambda_crit"}
-    orifice = Orifice(**{k: _num(_section(raw, "orifice", ok, False), "orifice", k)
-                         for k in _section(raw, "orifice", ok, False)})
+    ok = {"cd_max", "lambda_crit", "law", "laminar_delta"}
+    osec = _section(raw, "orifice", ok, False)
+    orifice = Orifice(**{k: (str(osec[k]) if k == "law" else _num(osec, "orifice", k)) for k in osec})
     ls = _section(raw, "leakage", {"tip_dh"}, False)
     tip_dh = check_range("leakage.tip_dh", _num(ls, "leakage", "tip_dh", 0.347), 0.0, 10.0, lo_open=True)
     bk = {"mode", "suction_pressure_pa", "delivery_volume_m3", "restriction_area_m2"}
@@ -257,7 +298,14 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     _check_ports(ports["suction"], ports["delivery"])
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,
-                      boundary=boundary, range=rng, numerics=num, source=source)
+                      boundary=boundary, range=rng, numerics=num, source=source,
+                      micro_motion=_micro_motion(raw))
+
+
+def _micro_motion(raw: dict) -> MicroMotion:
+    """The optional ``micro_motion`` section (two choices, each a string)."""
+    sec = _section(raw, "micro_motion", {f.name for f in fields(MicroMotion)}, False)
+    return MicroMotion(**{k: v if isinstance(v, str) else repr(v) for k, v in sec.items()})
 
 
 def _check_ports(s: Port, d: Port) -> None:

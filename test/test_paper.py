@@ -7,11 +7,13 @@ with the reason, so the discrepancy stays visible and a fix is noticed.
 """
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from gerotor_twin.cli import main
+from gerotor_twin.config import MicroMotion
 from gerotor_twin.paper.calibration import DEFAULT_RESULT_PATH, acceptance
 from gerotor_twin.paper.efficiency import row_slopes
 from gerotor_twin.paper.reference import PAPER_EFFICIENCY, PRESSURES_BAR, SPEEDS_RPM, slope_per_bar
@@ -79,21 +81,34 @@ def test_config_uses_the_recorded_calibration(cfg):
     assert cfg.clearances.lateral_m == pytest.approx(res["lateral_m"], abs=1e-8)
 
 
-def test_micro_motion_models_give_close_trajectories(section4, cfg):
-    """Mobility, Method 1 and FDM: trajectories within 1 % of δ at every point of the cycle.
+@pytest.mark.parametrize("volumes", ["nominal", "displaced"])
+def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
+    """Mobility, Method 1 and FDM: trajectories within 1 % of δ at every point of the cycle (chamber volumes of
+    the centred gear, as in the paper; measured ≤ 0.03 µm).
 
     Why so close (the film models differ by 1.5–13 % in force for the same eccentricity,
     docs/bearing.md): under the pressure load the outer gear rests on the inner gear at
     almost every step (the sec. 3.7 overlap check binds), so the position is set by the
-    gear geometry and the film model only decides how fast it gets there.  Measured:
-    ≤ 0.03 µm.  The cycles start at the same shaft angle (``chamber_cycle``).
+    gear geometry and the film model only decides how fast it gets there.
+    With the volumes of the displaced gear (the default since issue 13) the gear's speed also
+    squeezes the closed chambers, so the film model's speed reaches the pressures: the median
+    difference stays below 1 % of δ (measured 0.014 µm), the largest, 1–3 steps after a contact
+    switch, below 3 % of δ (measured 0.44 µm Method 1, 0.89 µm FDM).
+    The cycles start at the same shaft angle (``chamber_cycle``).
     """
+    if volumes == "nominal":
+        from gerotor_twin.paper.section4 import run_section4
+        section4 = run_section4(replace(cfg, micro_motion=MicroMotion(chamber_volumes="nominal")))
     delta = cfg.clearances.tooth_tip_m
     ref = section4["cycles"]["mobility"].eccentricity
     for m in ("short", "fdm"):
         e = section4["cycles"][m].eccentricity
         assert e.shape == ref.shape
-        assert np.hypot(*(e - ref).T).max() < 0.01 * delta, m
+        d = np.hypot(*(e - ref).T)
+        if volumes == "nominal":
+            assert d.max() < 0.01 * delta, m
+        else:
+            assert np.median(d) < 0.01 * delta and d.max() < 0.03 * delta, (m, d.max())
         assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
     assert np.ptp(ref[:, 0]) > 0.1 * delta      # and the trajectory is not a point
 

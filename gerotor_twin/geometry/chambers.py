@@ -5,8 +5,10 @@ lobes j and j+1 and by the outer profile (lobe j+1 arc, root arc, lobe j arc).
 Volumes, force projections and ports are computed on the ideal geometry: the
 design tooth-tip clearance δ (tens of µm) changes a chamber area by well under
 1 % and its rate of change not at all to first order; δ enters the model only
-through the tooth-tip gaps (:mod:`.gaps`).  The same holds for the outer-gear
-micro-displacement (sec. 3.7 of [1] also keeps the chamber volumes nominal).
+through the tooth-tip gaps (:mod:`.gaps`).  The outer-gear micro-displacement
+moves the outer contour rigidly (``chamber_polygon(..., displacement=e)``, closed at
+the minimum-gap lines); to first order that changes V_j by the force projections
+of eqs. 24–25 times **e** (:mod:`gerotor_twin.model.volumes`).
 
 Force projections and arms (eqs. 24–25 of [1])
 ----------------------------------------------
@@ -71,27 +73,49 @@ def _unwrap_to(a, ref):
     return ref + (a - ref + math.pi) % (2 * math.pi) - math.pi
 
 
+def _seals(gi: GerotorGeometry, theta: float, j: int, displacement):
+    """Inner-profile parameters of the two seals of chamber j, their points on the inner profile
+    and on the lobes (fixed frame) [rad, m, m]: the sealing points for the centred gear, the
+    minimum-gap points (:func:`.gaps.exact_gaps`, negative gap = overlap) for a displaced one."""
+    N = gi.chambers
+    jn = (j + 1) % N
+    if displacement[0] == 0.0 and displacement[1] == 0.0:
+        X, _ = contact_points(gi, theta)
+        u0 = float(gi.lobe_parameter(theta, j))
+        return (u0, u0 + 2 * math.pi / N), (X[j], X[jn]), (X[j], X[jn])
+    from .gaps import exact_gaps
+    gs = exact_gaps(gi, theta, displacement, with_le=False)
+    lobe = gs.point + gs.h[:, None] * gs.normal      # the lobe circle's point nearest the inner gear
+    u0 = float(gs.u[j])
+    u1 = u0 + (float(gs.u[jn]) - u0) % (2 * math.pi)
+    return (u0, u1), (gs.point[j], gs.point[jn]), (lobe[j], lobe[jn])
+
+
 def chamber_polygon(g: GerotorGeometry, theta: float, j: int, n_inner: int = 400,
-                    n_arc: int = 80) -> np.ndarray:
+                    n_arc: int = 80, displacement=(0.0, 0.0)) -> np.ndarray:
     """Closed polygon (K, 2) [m] of chamber j at shaft angle θ (ideal geometry).
 
     Order: inner profile from lobe j to lobe j+1 (CCW about O1), then the
     outer profile back (lobe j+1 arc, root arc, lobe j arc): the polygon is
-    clockwise.
+    clockwise.  ``displacement`` [m] moves the outer gear (lobes and root circle)
+    rigidly; the chamber then ends at the minimum-gap lines of its two lobes
+    (the seal segment from the inner profile to the lobe, of length |gap|).
     """
     gi = ideal(g)
     N, R, r, Re = gi.chambers, gi.lobe_centre_radius, gi.lobe_radius, gi.outer_root_radius
     jn = (j + 1) % N
-    X, _ = contact_points(gi, theta)
-    C = gi.lobe_centres(theta)
-    O2 = gi.outer_centre
-    # inner profile between the two sealing points
-    u0 = float(gi.lobe_parameter(theta, j))
-    u = np.linspace(u0, u0 + 2 * math.pi / N, n_inner)
+    (u0, u1), (I0, I1), (L0, L1) = _seals(gi, theta, j, displacement)
+    X = {j: L0, jn: L1}
+    C = gi.lobe_centres(theta, displacement)
+    O2 = gi.outer_centre + np.asarray(displacement, float)
+    # inner profile between the two seals
+    u = np.linspace(u0, u1, n_inner)
     gx, gy = gi.inner_profile(u)
     ix, iy = _rot(theta, gx, gy)
     inner = np.column_stack([ix, iy])
-    inner[0], inner[-1] = X[j], X[jn]          # exact sealing points
+    inner[0], inner[-1] = I0, I1               # exact seal points
+    if not np.allclose(L1, I1, rtol=0, atol=1e-15):
+        inner = np.vstack([inner, L1])         # seal segment to the displaced lobe
     # lobe/root junctions: circle (C_k, r) ∩ circle (O2, Re)
     alpha = math.acos((Re * Re + R * R - r * r) / (2 * Re * R))
     phi = float(gi.outer_angle(theta))
@@ -111,7 +135,8 @@ def chamber_polygon(g: GerotorGeometry, theta: float, j: int, n_inner: int = 400
     tr = np.linspace(a_n - alpha, a_j + alpha, n_arc)
     root = np.column_stack([O2[0] + Re * np.cos(tr), O2[1] + Re * np.sin(tr)])
     arc_this = lobe_arc(j, a_j, X[j], a_j + alpha)[::-1]      # from its CCW junction to X_j
-    return np.vstack([inner, arc_next[1:], root[1:-1], arc_this[:-1]])
+    poly = np.vstack([inner, arc_next[1:], root[1:-1], arc_this[:-1]])
+    return poly if np.allclose(L0, I0, rtol=0, atol=1e-15) else np.vstack([poly, L0])
 
 
 def polygon_area(poly: np.ndarray) -> float:

@@ -44,10 +44,10 @@ __all__ = ["GeometryTables", "build_tables", "interp", "COLUMNS"]
 
 COLUMNS = ("V", "DV", "AS", "AD", "FX", "FY", "TQ",
            "GX", "GY", "GG", "HXX", "HXY", "HYY", "HXG", "HYG", "HGG",
-           "KREL", "VR", "ARM", "PX", "PY")
+           "KREL", "VR", "ARM", "PX", "PY", "DFX", "DFY")
 (V, DV, AS, AD, FX, FY, TQ, GX, GY, GG, HXX, HXY, HYY, HXG, HYG, HGG,
- KREL, VR, ARM, PX, PY) = range(len(COLUMNS))
-TABLE_VERSION = 3
+ KREL, VR, ARM, PX, PY, DFX, DFY) = range(len(COLUMNS))
+TABLE_VERSION = 4
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,10 @@ class GeometryTables:
         suction/delivery [m²], FX/FY pressure force per unit pressure [m²] (eq. 24),
         TQ torque about O2 per unit pressure [m³] (eq. 25), GX/GY/GG gap gradient
         [-, -, m/rad], H** gap Hessian, KREL relative curvature [1/m], VR = v_r/ω
-        [m/rad], ARM lever of the contact normal about O2 [m], PX/PY gap point [m].
+        [m/rad], ARM lever of the contact normal about O2 [m], PX/PY gap point [m],
+        DFX/DFY = d(FX, FY)/dθ [m²/rad].  FX, FY are also ∂V/∂e, the first-order change
+        of the chamber volume with the outer-gear displacement (virtual work: p dV = F·de),
+        so DFX, DFY are ∂(dV/dθ)/∂e (:mod:`gerotor_twin.model.volumes`).
     period : float
         Θ = 2πN/(N−1) [rad].
     shift : float
@@ -181,6 +184,9 @@ def build_tables(g: GerotorGeometry, suction: Port, delivery: Port, size: int = 
         data[TQ, i] = b * (ly * (-m[1]) + lx * m[0])      # Eq. (25)
         if progress is not None and i % 256 == 0:
             progress(i, size)
+    step = g.chamber_period / size                        # periodic central differences, O(step²)
+    data[DFX] = (np.roll(data[FX], -1) - np.roll(data[FX], 1)) / (2 * step)
+    data[DFY] = (np.roll(data[FY], -1) - np.roll(data[FY], 1)) / (2 * step)
     h0, grad, hess, krel, vr, arm, Px, Py = _gap_columns(g, th)
     data[GX], data[GY], data[GG] = grad
     data[HXX], data[HXY], data[HYY] = hess[0, 0], hess[0, 1], hess[1, 1]

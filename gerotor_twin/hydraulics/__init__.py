@@ -23,9 +23,11 @@ module              content
                     density with thermal expansion, β_L(T) (not yet in the model)
 ``mixture``         oil + free air + vapour barotropic mixture: closed-form
                     s(p), β(p), inverse (not yet in the model; docs/fluid.md)
-``orifice``         ``discharge_coefficient`` Cd = Cd_max·tanh(2λ/λ_crit);
-                    ``orifice_flow`` — Eq. (21) of [1] with Cd(λ), laminar near
-                    Δp = 0
+``orifice``         Eq. (21) of [1]: ``laminar_turbulent_flow`` (Merritt's laminar
+                    Cd = δ√Re and turbulent Cd in series; default law),
+                    ``orifice_flow`` with ``discharge_coefficient``
+                    Cd = Cd_max·tanh(2λ/λ_crit) (flow-number law),
+                    ``port_orifice_flow`` (the configured one)
 ``gaps``            ``slot_flow`` (plane Poiseuille, sec. 3.3–3.4);
                     ``tooth_tip_flow`` — Eq. (22) of [1], Poiseuille + Couette;
                     lateral gaps as annular sectors (Gamez-Montero & Codina):
@@ -40,6 +42,7 @@ Kernel signatures (argument order is part of the interface)::
     density_ratio(p_up, p_down, beta_star, ratio, p_atm, band, p_vap) -> r
     discharge_coefficient(flow_number, cd_max, lambda_crit) -> cd
     orifice_flow(dp, area, cd_max, lambda_crit, rho, mu) -> (q, dq_ddp)
+    laminar_turbulent_flow(dp, area, cd, delta, rho, mu) -> (q, dq_ddp)
     slot_flow(dp, h, width, length, mu) -> (q, dq_ddp)
     tooth_tip_flow(dp, h, le, v_r, width, mu) -> (q, dq_ddp)
     sector_circumferential_flow(dp, h, chi, r_in, r_out, mu) -> (q, dq_ddp)

@@ -26,8 +26,22 @@ References
    AMESim-based pump and valve models of M. Borghi, M. Milani and co-workers.
 .. [3] Maplesoft, MapleSim Hydraulics Library, *Orifice* (parameters
    ``Cdmax`` and ``Critno``, the critical flow number), online help.
-.. [4] H. E. Merritt, *Hydraulic Control Systems*, Wiley, 1967, ch. 3
-   (orifice flow, laminar and turbulent regimes).
+.. [4] H. E. Merritt, *Hydraulic Control Systems*, Wiley, 1967, sec. 3.3–3.4
+   (orifice flow: turbulent Cd = π/(π+2) ≈ 0.611 for a sharp edge; at low Reynolds
+   number Cd = δ√Re, δ ≈ 0.2 from Wuest's data, i.e. the laminar law
+   Q = 2δ²D_h A Δp/μ; the two meet at Re_t = (Cd/δ)²).
+
+:func:`laminar_turbulent_flow` (config ``orifice.law: merritt``) puts the two regimes of
+[4] in series, Δp = Q/G_lam + Q²/K_turb², so that Q follows Merritt's laminar law for
+Re ≪ Re_t and his turbulent law for Re ≫ Re_t with a smooth, finite dQ/dΔp.
+``orifice.law: flow_number`` (default) is the flow-number law.  What could be checked of
+its sources (issue 13): MapleSim's *Orifice* [3] documents a tanh law in the flow number
+with the parameters Cdmax and Critno (its rendered formula reads as tanh(λ/Critno), without
+the factor 2 used here; the AMESim form 2λ/λ_crit [2] is as recalled, not re-checked), and
+a public HYGESim-style gear-machine code sets λ_crit = 1000, Cq,max = 0.7.  Merritt's law
+is the one with published constants (tests: ``test/test_hydraulics_orifice_merritt.py``);
+it is not the default yet because with it the default numerics exceed the RMS pressure
+budget at 2000 rpm / 27.5 bar (1.05 % against 1 %; docs/paper.md, "Orifice law").
 """
 from __future__ import annotations
 
@@ -35,7 +49,17 @@ import math
 
 from gerotor_twin._jit import njit
 
-__all__ = ["discharge_coefficient", "orifice_flow", "ORIFICE_SERIES_SWITCH"]
+__all__ = ["discharge_coefficient", "orifice_flow", "ORIFICE_SERIES_SWITCH", "laminar_turbulent_flow",
+           "port_orifice_flow", "LAW_FLOW_NUMBER", "LAW_MERRITT", "ORIFICE_LAWS", "MERRITT_TURBULENT_CD",
+           "WUEST_LAMINAR_DELTA"]
+
+#: Orifice laws by name (config ``orifice.law``) and their kernel codes.
+LAW_FLOW_NUMBER, LAW_MERRITT = 0, 1
+ORIFICE_LAWS = {"flow_number": LAW_FLOW_NUMBER, "merritt": LAW_MERRITT}
+#: Turbulent discharge coefficient of a sharp-edged orifice, π/(π + 2) (free-streamline theory, [4]).
+MERRITT_TURBULENT_CD = math.pi / (math.pi + 2.0)
+#: Laminar flow coefficient δ of a sharp-edged circular orifice (Wuest's data, quoted by [4]): Cd = δ√Re.
+WUEST_LAMINAR_DELTA = 0.2
 
 #: Below this value of z = 2λ/λ_crit the derivative uses the Taylor series of
 #: tanh(z)/z + sech²(z) instead of the direct formula (0/0 at z = 0).  The
@@ -167,3 +191,60 @@ def orifice_flow(dp, area, cd_max, lambda_crit, rho, mu):
     if dp < 0.0:
         q = -q
     return q, a * cd_max * area / r * bracket
+
+
+@njit(inline="always")
+def laminar_turbulent_flow(dp, area, cd, delta, rho, mu):
+    r"""Orifice flow with Merritt's laminar and turbulent laws in series [4].
+
+    Parameters
+    ----------
+    dp : float
+        Pressure difference Δp = p_a − p_b [Pa].
+    area : float
+        Orifice area A [m²]; A ≤ 0 means closed.
+    cd : float
+        Turbulent discharge coefficient [-] (0.611 for a sharp edge [4]; 0.7 in config/pump.yaml).
+    delta : float
+        Laminar flow coefficient δ [-] (0.2 for a sharp-edged circular orifice [4]).
+    rho, mu : float
+        Density [kg/m³] and dynamic viscosity [Pa·s] (> 0; floored like :func:`orifice_flow`).
+
+    Returns
+    -------
+    q : float
+        Volume flow from a to b [m³/s].
+    dq_ddp : float
+        dQ/dΔp [m³/(s·Pa)] (finite, = G_lam at Δp = 0).
+
+    Notes
+    -----
+    With D_h = √(4A/π), G = 2δ²D_h A/μ (laminar, Q = GΔp) and K = Cd A √(2/ρ) (turbulent,
+    Q = K√Δp), the series law Δp = Q/G + Q²/K² gives
+
+    .. math::
+        Q = \frac{2|\Delta p|}{1/G + \sqrt{1/G^2 + 4|\Delta p|/K^2}},\qquad
+        \frac{dQ}{d\Delta p} = \frac{1}{1/G + 2Q/K^2}.
+
+    Its discharge coefficient Q/(A√(2Δp/ρ)) tends to δ√Re (Re on the mean orifice
+    velocity) for Re ≪ Re_t = (Cd/δ)² and to Cd for Re ≫ Re_t.
+    """
+    if not area > 0.0:
+        return 0.0, 0.0
+    r = rho if rho > _RHO_MIN else _RHO_MIN
+    m = mu if mu > _MU_MIN else _MU_MIN
+    d_h = math.sqrt(4.0 * area / math.pi)
+    inv_g = m / (2.0 * delta * delta * d_h * area)
+    k2 = cd * cd * area * area * 2.0 / r
+    adp = abs(dp)
+    q = 2.0 * adp / (inv_g + math.sqrt(inv_g * inv_g + 4.0 * adp / k2))
+    dq = 1.0 / (inv_g + 2.0 * q / k2)
+    return (q if dp >= 0.0 else -q), dq
+
+
+@njit(inline="always")
+def port_orifice_flow(dp, area, law, cd, lambda_crit, delta, rho, mu):
+    """Eq. (21) of [1] with the configured law: ``LAW_MERRITT`` or ``LAW_FLOW_NUMBER``; (Q, dQ/dΔp)."""
+    if law == LAW_MERRITT:
+        return laminar_turbulent_flow(dp, area, cd, delta, rho, mu)
+    return orifice_flow(dp, area, cd, lambda_crit, rho, mu)

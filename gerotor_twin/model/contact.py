@@ -147,7 +147,8 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat, reuse=False):
     ex, ey : float
         Displacement taken [m] (pulled back along **e** if the gears would overlap).
     gamma : float
-        Inner-gear rotation [rad] (forward until one contact if they would not touch).
+        Inner-gear rotation [rad] (forward until one contact if they would not touch and
+        ``tab.turn_inner``; 0 otherwise: the gaps stay those of the displaced, unturned gears).
     kc : int
         Index of the lobe in contact (smallest gap).
     """
@@ -157,7 +158,8 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat, reuse=False):
         h_out[k] = gap_value(cmat[k], delta, ex, ey, 0.0)
     gamma = 0.0
     if np.min(h_out) >= 0.0:
-        gamma = _rotation_to_touch(cmat, h_out, ex, ey)
+        if tab.turn_inner:
+            gamma = _rotation_to_touch(cmat, h_out, ex, ey)
     else:
         ex, ey = _pull_back(cmat, h_out, ex, ey)
     kc = 0

@@ -32,9 +32,10 @@ import math
 from .._jit import njit
 from ..geometry.tables import AD, AS, DV, KREL, V, VR
 from ..hydraulics.gaps import tooth_tip_flow
-from ..hydraulics.orifice import orifice_flow
+from ..hydraulics.orifice import port_orifice_flow
 from ..hydraulics.state_equation import bulk_modulus_of, state_of
 from .contact import column, locate
+from .volumes import displace_volumes
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY)
 
@@ -109,14 +110,16 @@ def port_flows(km, op, ws, jac, want_jac):
     n = pc.n
     p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
     for j in range(n):
-        q, dq = orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        q, dq = port_orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
         r = op.rho_s / rho[j] if q > 0.0 else 1.0       # the suction port is a source at p_s, not a state
         acc[j] += r * q
         fl[FL_SUCTION] += q
         fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
         if want_jac:
             jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
-        q, dq = orifice_flow(p[n] - p[j], geo[j, G_AD], pc.cd_max, pc.lambda_crit, pc.density, pc.viscosity)  # Eq. (21)
+        q, dq = port_orifice_flow(p[n] - p[j], geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
         fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
         fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
         transfer(n, j, q, dq, ws, jac, want_jac)
@@ -139,6 +142,8 @@ def tip_flows(gaps, km, op, ws, jac, want_jac):
         if hk > 0.0:
             le = 2.0 * math.sqrt(2.0 * hk * pc.tip_dh / geo[j, G_KREL])       # osculating-circle length
             q, dq = tooth_tip_flow(p[jm] - p[j], hk, le, op.omega * geo[j, G_VR], pc.width, pc.viscosity)  # Eq. (22)
+            q *= pc.tip_flow_factor
+            dq *= pc.tip_flow_factor
         q += pc.g_lateral * (p[jm] - p[j])                                   # sec. 3.2
         dq += pc.g_lateral
         transfer(jm, j, q, dq, ws, jac, want_jac)
@@ -157,8 +162,8 @@ def line_flows(km, op, ws, jac, want_jac):
     ws.flows[FL_DRAIN] = q_dr
     ws.flows[FL_DELIVERY] -= q_sd + q_dr
     if pc.restriction:
-        q, dq = orifice_flow(ws.p[n] - pc.p_tank, pc.restriction_area, pc.cd_max, pc.lambda_crit, pc.density,
-                             pc.viscosity)
+        q, dq = port_orifice_flow(ws.p[n] - pc.p_tank, pc.restriction_area, pc.orifice_law, pc.cd_max,
+                                  pc.lambda_crit, pc.laminar_delta, pc.density, pc.viscosity)
         ws.acc[n] -= q
         ws.flows[FL_RESTRICTION] = q
         if want_jac:
@@ -208,6 +213,7 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     n = km.pc.n
     chamber_geometry(theta, km.tab, n, ws.geo)
     volume_states(y, km, op, ws)
+    displace_volumes(theta, km.tab, n, ws.disp, ws.geo, ws.acc, G_V, G_DV)   # micro_motion.chamber_volumes
     for i in range(ws.flows.shape[0]):
         ws.flows[i] = 0.0
     if want_jac:

@@ -38,6 +38,7 @@ from .contact import contact
 from .flows import rhs
 from .loads import outer_gear_load
 from .params import ERROR_PRESSURE, FL_DELIVERY
+from .volumes import move_volumes
 
 # ------------------------------------------------------------------ outputs
 # per-step record columns besides the chamber pressures and gaps
@@ -293,6 +294,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
     """
     pc = km.pc
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
+    move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals)
     for n in range(n_steps):
@@ -314,6 +316,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
             fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
         ex0, ey0 = ex, ey
         ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, True)
+        move_volumes(km.tab, ws.disp, ex, ey, h)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
         _first_stage(y, theta, km, op, ws, integrals)   # end-of-step flows (recorded) = next first stage
@@ -338,6 +341,7 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
         ex, ey, fx, fy = heun_step(bearing.kernel, bearing.params, e[0], e[1], h, theta, op.omega, kc, km, ws,
                                    counters)
         ex, ey, gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
+        move_volumes(km.tab, ws.disp, ex, ey, h)
         ws.ctrl[CT_FRESH] = 0.0              # the gaps moved: the next first stage is recomputed
         e[0], e[1] = ex, ey
         rec[i, R_EX], rec[i, R_EY], rec[i, R_FX], rec[i, R_FY] = ex, ey, fx, fy

@@ -24,6 +24,7 @@ from ..config import PumpConfig
 from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
+from ..hydraulics.orifice import ORIFICE_LAWS
 from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
@@ -49,6 +50,12 @@ class KernelTables(NamedTuple):
     period: float       #: chamber period Θ = 2πN/(N−1) [rad]
     shift: float        #: lead of chamber j+1 over chamber j, 2π/(N−1) [rad]
     scale: float        #: M/Θ, samples per radian [1/rad]
+    #: sec. 3.7 "no overlap" branch: turn the inner gear until one lobe touches (False: the gears keep
+    #: their nominal angles; the fixed-centre model with ``micro_motion.fixed_centre_contact: none``)
+    turn_inner: bool = True
+    #: chamber volumes follow the outer gear (``micro_motion.chamber_volumes: displaced``,
+    #: :mod:`gerotor_twin.model.volumes`); False: volumes of the centred gear set
+    volumes_follow_gear: bool = True
 
 
 class PumpConstants(NamedTuple):
@@ -74,6 +81,9 @@ class PumpConstants(NamedTuple):
     tolerance: float            #: sub-step error tolerance (measure: ``error_measure``) [-]
     error_measure: int          #: ERROR_LOG_DENSITY or ERROR_PRESSURE
     log_density_tolerance: float  #: cap of the ln ρ error where β is small (ERROR_PRESSURE) [-]
+    tip_flow_factor: float = 1.0  #: multiplies the tooth-tip flow, Eq. (22) (0: tips sealed; what-if runs) [-]
+    orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
+    laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
 
 
 class KernelModel(NamedTuple):
@@ -121,6 +131,8 @@ class Workspace(NamedTuple):
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
     ctrl: np.ndarray        #: (3,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s]
+    disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
+                            #: velocity of its last move [m/s] (:mod:`.volumes`)
 
 
 def _conductances(config: PumpConfig, lat: LateralGeometry) -> tuple[float, float, float]:
@@ -149,7 +161,8 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction=config.boundary.mode == "restriction", line_volume=config.boundary.delivery_volume_m3,
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
-        log_density_tolerance=n.log_density_tolerance)
+        log_density_tolerance=n.log_density_tolerance,
+        orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta)
     return KernelModel(tab=tab, pc=pc, eos=state_equation(f))
 
 
@@ -169,4 +182,5 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 6)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(3))
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(3),
+                     disp=v(4))

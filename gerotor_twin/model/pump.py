@@ -29,6 +29,14 @@ __all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
 BEARING_MODELS = MODEL_NAMES      #: the outer-gear models, by name (one list: bearing.registry)
 
 
+def _with_micro_motion(km, config: PumpConfig, bearing: str):
+    """The kernel model with the choices of ``config.micro_motion``: fixed-centre contact rule
+    (sec. 3.7 of [1]) and chamber volumes of the displaced or the centred outer gear."""
+    mm = config.micro_motion
+    turn = not (bearing == "fixed" and mm.fixed_centre_contact == "none")
+    return km._replace(tab=km.tab._replace(turn_inner=turn, volumes_follow_gear=mm.chamber_volumes == "displaced"))
+
+
 class PumpModel:
     """Lumped-parameter Gerotor pump (sec. 3 of [1]) with a choice of outer-gear model.
 
@@ -60,7 +68,7 @@ class PumpModel:
                                                 viscosity_pa_s=config.fluid.viscosity_pa_s)
         self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
         self.displacement = g.displacement_closed_form()   # ideal profiles; δ does not enter
-        self.kernel = kernel_model(config, self.tables, self.lateral)
+        self.kernel = _with_micro_motion(kernel_model(config, self.tables, self.lateral), config, bearing)
         self._ws = workspace(self.N)
         self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
 

@@ -39,7 +39,7 @@ from scipy.optimize import least_squares
 from ..config import PumpConfig
 from .efficiency import efficiency_points, row_slopes, with_clearances
 
-__all__ = ["calibrate", "evaluate", "acceptance", "DEFAULT_RESULT_PATH"]
+__all__ = ["calibrate", "evaluate", "acceptance", "refit_lateral", "DEFAULT_RESULT_PATH"]
 
 #: Where ``gerotor-twin paper calibrate`` keeps its result (committed with the repo).
 DEFAULT_RESULT_PATH = Path(__file__).resolve().parents[2] / "docs" / "calibration.json"
@@ -60,6 +60,32 @@ def acceptance(points: list[dict], slopes: list[dict]) -> dict:
     return {"max_point_difference": worst, "point_tolerance": POINT_TOLERANCE,
             "max_slope_relative_difference": worst_slope, "slope_tolerance": SLOPE_TOLERANCE,
             "passed": bool(worst <= POINT_TOLERANCE and worst_slope <= SLOPE_TOLERANCE)}
+
+
+def refit_lateral(cfg: PumpConfig, tooth_tip_m: float, start_lateral_m: float, max_nfev: int = 15) -> dict:
+    """Best lateral clearance [m] at a given tooth-tip clearance δ [m] (least squares on the 18 fixed points).
+
+    Returns
+    -------
+    dict
+        ``tooth_tip_m``, ``lateral_m``, ``rms_difference`` [-], ``acceptance`` (:func:`acceptance`),
+        ``slopes``, ``points``, ``evaluations``.
+    """
+    calls = []
+
+    def residuals(x):
+        r = evaluate(cfg, tooth_tip_m, 1e-6 * math.exp(x[0]))
+        calls.append(r)
+        return np.array([p["difference"] for p in r["points"]])
+
+    one = least_squares(residuals, [math.log(start_lateral_m * 1e6)], diff_step=0.005, x_scale=0.1,
+                        xtol=1e-3, ftol=1e-4, max_nfev=max_nfev)
+    lat = 1e-6 * float(math.exp(one.x[0]))
+    best = evaluate(cfg, tooth_tip_m, lat)
+    d = np.array([p["difference"] for p in best["points"]])
+    return {"tooth_tip_m": float(tooth_tip_m), "lateral_m": lat, "rms_difference": float(np.sqrt(np.mean(d ** 2))),
+            "acceptance": acceptance(best["points"], best["slopes"]), "slopes": best["slopes"],
+            "points": best["points"], "evaluations": len(calls) + 1}
 
 
 def calibrate(cfg: PumpConfig, start=(31.4e-6, 134.8e-6), progress=print) -> dict:
@@ -99,11 +125,8 @@ def calibrate(cfg: PumpConfig, start=(31.4e-6, 134.8e-6), progress=print) -> dic
     best = evaluate(cfg, tip, lat)
     valley = []
     for f in (0.6, 0.8, 1.25):   # how well-determined is the split: refit lateral only at other δ
-        one = least_squares(lambda x: np.array([p["difference"] for p in evaluate(
-            cfg, tip * f, 1e-6 * math.exp(x[0]))["points"]]), [math.log(lat * 1e6)], diff_step=0.005,
-            x_scale=0.1, xtol=1e-3, ftol=1e-4, max_nfev=15)
-        valley.append({"tooth_tip_m": tip * f, "lateral_m": 1e-6 * float(math.exp(one.x[0])),
-                       "rms_difference": float(np.sqrt(np.mean(one.fun ** 2)))})
+        one = refit_lateral(cfg, tip * f, lat)
+        valley.append({k: one[k] for k in ("tooth_tip_m", "lateral_m", "rms_difference")})
         progress(f"  valley: δ = {tip * f * 1e6:.2f} µm → best lateral {valley[-1]['lateral_m'] * 1e6:.2f} µm, "
                  f"rms {100 * valley[-1]['rms_difference']:.3f} pt")
     d = np.array([p["difference"] for p in best["points"]])

@@ -82,10 +82,66 @@ def cmd_figures(args) -> int:
     return 0
 
 
+def print_valley(res: dict, out=print) -> None:
+    """The three tables of ``paper calibrate --valley``: fit, loss split, MM − fixed."""
+    rows = res["rows"]
+    out("\nfit to the fixed-centre rows of tables 3–5 (lateral clearance refitted at each δ; criteria ±2 pt, "
+        "slopes ±10 %)")
+    out(f"  {'δ [µm]':>7s} {'lateral [µm]':>13s} {'rms [pt]':>9s} {'max [pt]':>9s}   slope error 1000/2000/3000 rpm")
+    for r in rows:
+        s = r["slope_relative_error"]
+        out(f"  {r['tooth_tip_m'] * 1e6:7.1f} {r['lateral_m'] * 1e6:13.1f} {r['rms_difference_pt']:9.2f} "
+            f"{r['max_point_difference_pt']:9.2f}   " + " ".join(f"{100 * s[k]:+6.1f} %" for k in ("1000", "2000", "3000"))
+            + ("   pass" if r["passed"] else "   FAIL"))
+    sp = res["split_point"]
+    out(f"\nlost points by path, fixed centre, {sp['rpm']:g} rpm / {sp['bar']:g} bar [pt of the theoretical flow]")
+    out(f"  {'δ [µm]':>7s} {'lost':>7s} {'drain':>7s} {'lateral':>8s} {'suc–del':>8s} {'tips':>7s} {'filling':>8s} "
+        f"{'interaction':>12s}")
+    for r in rows:
+        ls = r["loss_split_pt"]
+        out(f"  {r['tooth_tip_m'] * 1e6:7.1f} {ls['lost']:7.2f} {ls['drain']:7.2f} {ls['lateral']:8.2f} "
+            f"{ls['suction_delivery']:8.2f} {ls['tips']:7.2f} {ls['filling']:8.2f} {ls['interaction']:12.2f}")
+    keys = list(rows[0]["mm_minus_fixed_pt"]["rotate"])
+    out("\nMM − fixed [pt], gap-driven (nominal chamber volumes), fixed-centre contact rule rotate | none "
+        "(paper: +1.35 … +2.08 at 5 bar, +1.92 … +2.08 at 27.5 bar)")
+    out(f"  {'δ [µm]':>7s} {'rule':>6s} " + " ".join(f"{k + ' rpm/bar':>16s}" for k in keys))
+    for r in rows:
+        for rule in ("rotate", "none"):
+            g = r["mm_minus_fixed_pt"][rule]
+            out(f"  {r['tooth_tip_m'] * 1e6:7.1f} {rule:>6s} " + " ".join(f"{g[k]:+16.2f}" for k in keys))
+
+
+def cmd_valley(args) -> int:
+    from ..config import load_config
+    from ..errors import InputError
+    from .valley import valley
+
+    cfg = load_config(args.config)
+    try:
+        deltas = [float(v) for v in args.deltas.split(",")]
+    except ValueError:
+        raise InputError("--deltas", args.deltas, "comma-separated tooth-tip clearances in (0, 500) µm") from None
+    for d in deltas:
+        if not 0.0 < d < 500.0:
+            raise InputError("--deltas", d, "(0, 500) µm")
+    t0 = time.perf_counter()
+    res = valley(cfg, deltas, progress=lambda line: print("  " + line, file=sys.stderr, flush=True))
+    res["wall_time_s"] = time.perf_counter() - t0
+    print(f"pump {cfg.source}; {len(deltas)} tooth-tip clearances in {res['wall_time_s']:.0f} s")
+    print_valley(res)
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(res, indent=1))
+        print(f"\nwrote {args.json}")
+    return 0
+
+
 def cmd_calibrate(args) -> int:
     from ..config import load_config
     from .calibration import calibrate, save
 
+    if args.valley:
+        return cmd_valley(args)
     cfg = load_config(args.config)
     print("fitting the tooth-tip and lateral clearances to the fixed-centre rows of tables 3–5 ...")
     res = calibrate(cfg, start=(args.start_tip_um * 1e-6, args.start_lateral_um * 1e-6))
@@ -101,6 +157,7 @@ def cmd_calibrate(args) -> int:
 def add_parser(sub) -> None:
     """Add ``paper`` with its three sub-commands to the ``gerotor-twin`` parser."""
     from .calibration import DEFAULT_RESULT_PATH
+    from .valley import DEFAULT_DELTAS_UM
 
     p = sub.add_parser("paper", help="reproduce section 4 of the paper (tables 3–5, figs. 12–16)")
     ps = p.add_subparsers(dest="paper_command", required=True)
@@ -119,4 +176,10 @@ def add_parser(sub) -> None:
     c.add_argument("--start-lateral-um", type=float, default=134.8, help="initial lateral clearance [µm]")
     c.add_argument("--out", default=str(DEFAULT_RESULT_PATH), help="result JSON")
     c.add_argument("--config", help="pump YAML")
+    c.add_argument("--valley", action="store_true",
+                   help="instead of fitting: for each δ of --deltas refit the lateral clearance and print fit, "
+                        "loss split by path and MM − fixed (≈ 5–25 s per δ)")
+    c.add_argument("--deltas", default=",".join(f"{d:g}" for d in DEFAULT_DELTAS_UM),
+                   help="tooth-tip clearances of --valley [µm], comma-separated")
+    c.add_argument("--json", help="--valley: write the table as JSON (docs/valley.json is the recorded one)")
     c.set_defaults(func=cmd_calibrate)

@@ -19,7 +19,7 @@ from scipy.optimize import brentq
 
 from ..bearing.registry import MODEL_NAMES
 from ..config import PumpConfig
-from ..hydraulics.orifice import orifice_flow
+from ..hydraulics.orifice import ORIFICE_LAWS, port_orifice_flow
 from ..model.pump import Inputs, Outputs, PumpModel
 from ..model.steady import SteadyResult, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
@@ -43,8 +43,9 @@ def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SE
     q = float(np.mean(o.delivery_flow))
     f, orf = cfg.fluid, cfg.orifice
     dp = bar * 1e5
-    return brentq(lambda a: orifice_flow(dp, a, orf.cd_max, orf.lambda_crit, f.density_kg_m3,
-                                         f.viscosity_pa_s)[0] - q, 1e-10, 1e-2, xtol=1e-14)
+    return brentq(lambda a: port_orifice_flow(dp, a, ORIFICE_LAWS[orf.law], orf.cd_max, orf.lambda_crit,
+                                              orf.laminar_delta, f.density_kg_m3, f.viscosity_pa_s)[0] - q,
+                  1e-10, 1e-2, xtol=1e-14)
 
 
 def run_section4(cfg: PumpConfig, models=MODEL_NAMES, rpm: float = SECTION4_RPM,
