@@ -101,7 +101,8 @@ def fig_plateau_errors(plateaus: list[Plateau], comps: list[dict], verdicts: lis
     """Mean flow error and η_v error per plateau with the tolerance band; filled marker = pass."""
     if not plateaus or not comps:
         return None
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(min(MAX_WIDTH_IN, 4 + 0.45 * len(plateaus)), 5.2), sharex=True)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(min(MAX_WIDTH_IN, max(7.5, 4 + 0.45 * len(plateaus))), 5.4),
+                                 sharex=True)
     idx = np.array([p.index for p in plateaus], float)
     v0 = verdicts[0]
     ftol = np.array([np.nan if v["flow_tol_m3s"] is None else v["flow_tol_m3s"] * LPM for v in v0])
@@ -136,7 +137,7 @@ def _plateau_title(ax, p: Plateau) -> None:
 
 def _rise_angles(ang: np.ndarray, P: np.ndarray) -> np.ndarray:
     """Angle [rad] of the steepest pressure rise of each chamber column of ``P`` (samples, N)."""
-    return ang[np.argmax(np.diff(P, axis=0, append=P[:1]), axis=0)]
+    return ang[(np.argmax(np.diff(P, axis=0, append=P[:1]), axis=0) + 1) % len(ang)]
 
 
 def folded_waveform(tw: TwinData, p: Plateau, rise_deg: float | None = None
