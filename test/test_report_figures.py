@@ -40,7 +40,8 @@ def captured(monkeypatch):
     png = F._png
 
     def checking_png(fig):
-        seen.append(([ax.get_title() for ax in fig.axes if ax.get_visible()], readability_problems(fig)))
+        shown = [ax for ax in fig.axes if ax.get_visible()]
+        seen.append(([ax.get_title() for ax in shown], readability_problems(fig), [len(ax.get_lines()) for ax in shown]))
         return png(fig)
     monkeypatch.setattr(F, "_png", checking_png)
     return seen
@@ -52,7 +53,7 @@ def test_report_figures_are_readable(tmp_path, captured):
     ts = [write_twin(tmp_path / f"t{i}.mcap", offset_m3s=o) for i, o in enumerate((1e-5, -2e-5))]
     build_report(b, ts, tmp_path / "r.html", labels=["model A", "model B"])
     assert len(captured) == 5
-    assert [p for _, p in captured] == [[]] * 5, captured
+    assert [c[1] for c in captured] == [[]] * 5, captured
 
 
 def _comp(label, n, shift):
@@ -69,7 +70,7 @@ def test_efficiency_map_and_verdict_chart_readable_at_size(captured):
     ps = [Plateau(k + 1, 0, 1, k, k + 0.5, 1000, 5) for k in range(12)]
     verdicts = [[{"verdict": "pass" if k % 2 else "fail", "flow_tol_m3s": 1e-5, "eta_tol": 0.01} for k in range(12)]] * 3
     assert F.fig_efficiency_map(comps) and F.fig_plateau_errors(ps, comps, verdicts)
-    assert [p for _, p in captured] == [[], []], captured
+    assert [c[1] for c in captured] == [[], []], captured
 
 
 N, S = 7, 72
@@ -107,14 +108,26 @@ def test_folded_waveform_follows_one_chamber_place():
 
 
 def test_every_plateau_gets_a_waveform_and_gap_panel(tmp_path, captured):
-    """Behaviour: one small panel per plateau in both angle figures (not a chosen few)."""
+    """Behaviour: one small panel per operating point in both angle figures (not a chosen few);
+    repeated visits of a point share its panel, every visit drawn."""
     from gerotor_twin.config import load_config
     from gerotor_twin.report.data import load_twin
     from report_helpers import T0
     tw = load_twin(write_twin(tmp_path / "t.mcap", duration=12.0), T0)
-    ps = [Plateau(k + 1, 0, 1, 0.5 + k, 1.4 + k, 1000, 10) for k in range(6)]
+    ps = [Plateau(k + 1, 0, 1, 0.5 + k, 1.4 + k, 1000 + 500 * (k % 5), 10) for k in range(7)]
     assert F.fig_waveforms([tw], ps) and F.fig_gaps([tw], ps, load_config())
-    (wave, p1), (gaps, p2) = captured
-    assert [t.split(":")[0] for t in wave] == [f"#{k}" for k in range(1, 7)] == [t.split(":")[0] for t in gaps]
-    assert all(t.endswith(" rev") and not t.endswith(" 0 rev") for t in wave)
+    (wave, p1, n1), (gaps, p2, n2) = captured
     assert p1 == p2 == []
+    assert wave[2] == "#3: 2000 rpm, 10.0 bar, 15 rev"           # 15 waveforms logged in 2.5-3.4 s
+    for titles in (wave, gaps):
+        assert titles[0] == "#1, #6\n1000 rpm, 10.0 bar" and titles[1] == "#2, #7\n1500 rpm, 10.0 bar"
+        assert [t.split(":")[0] for t in titles[2:]] == ["#3", "#4", "#5"]
+    assert n1 == [2, 2, 1, 1, 1]                                  # one mean line per visit
+    assert n2 == [8, 8, 7, 7, 7]                                  # + the 6 other gaps once per panel
+
+
+def test_group_plateaus():
+    """Behaviour: same point within 2 % speed and 0.5 bar, in order of first visit."""
+    ps = [Plateau(1, 0, 1, 0, 1, 1000, 5.0), Plateau(2, 0, 1, 0, 1, 2000, 5.0), Plateau(3, 0, 1, 0, 1, 1015, 5.4),
+          Plateau(4, 0, 1, 0, 1, 1030, 5.0), Plateau(5, 0, 1, 0, 1, 1000, 5.6)]
+    assert [[p.index for p in g] for g in F.group_plateaus(ps)] == [[1, 3], [2], [4], [5]]

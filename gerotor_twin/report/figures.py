@@ -20,7 +20,7 @@ from .analysis import Plateau, revolution_phase  # noqa: E402
 from .data import TwinData  # noqa: E402
 
 __all__ = ["fig_efficiency_map", "fig_plateau_errors", "fig_waveforms", "fig_trajectory", "fig_gaps",
-           "gap_profile", "RC", "DPI", "MAX_WIDTH_IN"]
+           "gap_profile", "group_plateaus", "folded_waveform", "RC", "DPI", "MAX_WIDTH_IN"]
 
 LPM = 6e4          # m³/s -> L/min
 _STYLES = ("-", "--", ":", "-.")
@@ -47,6 +47,18 @@ def _png(fig) -> bytes:
     fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
     plt.close(fig)
     return buf.getvalue()
+
+
+def _figure_legend(fig, axes, twins=(), visits: bool = False) -> None:
+    """One legend under the figure for the labelled lines of all ``axes`` (each label once); with
+    ``visits`` (panels of repeated visits, coloured by time) also one black line style per twin."""
+    handles = {lab: h for ax in axes for h, lab in zip(*ax.get_legend_handles_labels())}
+    if visits:
+        for i, tw in enumerate(twins):
+            handles.setdefault(f"{tw.label} (several visits: dark → light in time)",
+                               plt.Line2D([], [], color="k", linestyle=_STYLES[i % 4]))
+    if handles:
+        fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(3, len(handles)))
 
 
 def _multiples(n: int, height_in: float = 2.5):
@@ -131,8 +143,36 @@ def fig_plateau_errors(plateaus: list[Plateau], comps: list[dict], verdicts: lis
     return _png(fig)
 
 
-def _plateau_title(ax, p: Plateau) -> None:
-    ax.set_title(f"#{p.index}: {p.rpm:.0f} rpm, {p.bar:.1f} bar")
+def group_plateaus(plateaus: list[Plateau], rpm_rel: float = 0.02, bar_abs: float = 0.5) -> list[list[Plateau]]:
+    """Plateaus at the same operating point (speed within ``rpm_rel`` [-], pressure within ``bar_abs``
+    [bar] of the group's first visit), in order of first visit; each group keeps time order."""
+    groups: list[list[Plateau]] = []
+    for p in plateaus:
+        for g in groups:
+            if abs(p.rpm - g[0].rpm) <= rpm_rel * max(abs(g[0].rpm), 1.0) and abs(p.bar - g[0].bar) <= bar_abs:
+                g.append(p)
+                break
+        else:
+            groups.append([p])
+    return groups
+
+
+def _group_title(ax, group: list[Plateau], extra: str = "") -> None:
+    """``#k: rpm, bar`` for one visit; the visits on a first line for several."""
+    q = group[0]
+    point = f"{q.rpm:.0f} rpm, {q.bar:.1f} bar"
+    if len(group) == 1:
+        ax.set_title(f"#{q.index}: {point}{extra}")
+        return
+    visits = (", ".join(f"#{p.index}" for p in group) if len(group) <= 4
+              else f"#{q.index} … #{group[-1].index} ({len(group)} visits)")
+    ax.set_title(f"{visits}\n{point}")
+
+
+def _visit_style(i_twin: int, k: int, n: int) -> dict:
+    """Line style of twin ``i_twin`` at visit ``k`` of ``n``: twin colours for one visit, else dark→light."""
+    color = _COLORS[i_twin % 4] if n == 1 else plt.get_cmap("viridis")(0.85 * k / max(1, n - 1))
+    return {"color": color, "linestyle": _STYLES[i_twin % 4]}
 
 
 def _rise_angles(ang: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -180,34 +220,37 @@ def fig_waveforms(twins: list[TwinData], plateaus: list[Plateau]) -> bytes | Non
     """Predicted chamber pressure vs shaft angle at every plateau: mean over its revolutions, min–max band.
 
     The same chamber place in every plateau (:func:`folded_waveform`): the one opening to
-    delivery nearest the angle found at the first plateau with waveforms.
+    delivery nearest the angle found at the first plateau with waveforms.  Repeated visits of
+    one operating point share a panel (:func:`group_plateaus`), dark → light in time order.
     """
     if not plateaus or not any(tw.waveforms is not None for tw in twins):
         return None
-    fig, axes, grid = _multiples(len(plateaus))
-    rise, counts = None, []
-    for ax, p in zip(axes, plateaus):
-        for i, tw in enumerate(twins):
-            f = folded_waveform(tw, p, rise)
-            if f is None:
-                continue
-            ang, mean, lo, hi, n, r = f
-            rise = r if rise is None else rise
-            deg = np.degrees(ang)
-            ax.fill_between(deg, pa_abs_to_bar_gauge(lo, P_ATM), pa_abs_to_bar_gauge(hi, P_ATM), color=_COLORS[i % 4],
-                            alpha=0.25, lw=0)
-            ax.plot(deg, pa_abs_to_bar_gauge(mean, P_ATM), _STYLES[i % 4], color=_COLORS[i % 4], lw=1.1,
-                    label=tw.label)
-            counts.append(str(n))
-        ax.set_title(f"#{p.index}: {p.rpm:.0f} rpm, {p.bar:.1f} bar, {'/'.join(counts) or 0} rev")
+    groups = group_plateaus(plateaus)
+    fig, axes, grid = _multiples(len(groups), 2.7 if any(len(g) > 1 for g in groups) else 2.5)
+    rise = None
+    for ax, group in zip(axes, groups):
+        counts = []
+        for k, p in enumerate(group):
+            for i, tw in enumerate(twins):
+                f = folded_waveform(tw, p, rise)
+                if f is None:
+                    continue
+                ang, mean, lo, hi, n, r = f
+                rise = r if rise is None else rise
+                st = _visit_style(i, k, len(group))
+                deg = np.degrees(ang)
+                ax.fill_between(deg, pa_abs_to_bar_gauge(lo, P_ATM), pa_abs_to_bar_gauge(hi, P_ATM), color=st["color"],
+                                alpha=0.2, lw=0)
+                ax.plot(deg, pa_abs_to_bar_gauge(mean, P_ATM), lw=1.1, label=tw.label if len(group) == 1 else None,
+                        **st)
+                counts.append(str(n))
+        _group_title(ax, group, f", {'/'.join(counts) or 0} rev")
         ax.set_xticks(range(0, 361, 90))
-        counts.clear()
     for ax in grid[-1]:
         ax.set_xlabel("shaft angle [deg]")
     for ax in grid[:, 0]:
         ax.set_ylabel("chamber p [bar g]")
-    handles = {lab: h for ax in axes for h, lab in zip(*ax.get_legend_handles_labels())}
-    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(4, max(1, len(handles))))
+    _figure_legend(fig, axes, twins, any(len(g) > 1 for g in groups))
     return _png(fig)
 
 
@@ -291,7 +334,8 @@ def gap_profile(tw: TwinData, p: Plateau, config, angles: np.ndarray, pump=None)
 
 @_styled
 def fig_gaps(twins: list[TwinData], plateaus: list[Plateau], config) -> bytes | None:
-    """Tooth-tip gap height vs shaft angle at every plateau (gap 1 bold, the others thin grey)."""
+    """Tooth-tip gap height vs shaft angle at every plateau (gap 1 bold, the others thin grey);
+    repeated visits of one operating point share a panel, dark → light in time order."""
     from gerotor_twin.model.pump import PumpModel
 
     if not plateaus or not any(tw.eccentricity is not None for tw in twins):
@@ -299,18 +343,21 @@ def fig_gaps(twins: list[TwinData], plateaus: list[Plateau], config) -> bytes | 
     angles = np.radians(np.arange(0, 360, 2.0))
     deg = np.degrees(angles)
     pump = PumpModel(config, "fixed")
-    fig, axes, grid = _multiples(len(plateaus))
+    groups = group_plateaus(plateaus)
+    fig, axes, grid = _multiples(len(groups), 2.7 if any(len(g) > 1 for g in groups) else 2.5)
     drawn = False
-    for ax, p in zip(axes, plateaus):
-        for i, tw in enumerate(twins):
-            h = gap_profile(tw, p, config, angles, pump)
-            if h is None:
-                continue
-            drawn = True
-            if i == 0:
-                ax.plot(deg, h[:, 1:] * 1e6, color="0.75", lw=0.5)
-            ax.plot(deg, h[:, 0] * 1e6, _STYLES[i % 4], color=_COLORS[i % 4], lw=1.2, label=f"gap 1, {tw.label}")
-        _plateau_title(ax, p)
+    for ax, group in zip(axes, groups):
+        for k, p in enumerate(group):
+            for i, tw in enumerate(twins):
+                h = gap_profile(tw, p, config, angles, pump)
+                if h is None:
+                    continue
+                if i == 0 and k == 0:
+                    ax.plot(deg, h[:, 1:] * 1e6, color="0.75", lw=0.5)
+                drawn = True
+                ax.plot(deg, h[:, 0] * 1e6, lw=1.2, label=f"gap 1, {tw.label}" if len(group) == 1 else None,
+                        **_visit_style(i, k, len(group)))
+        _group_title(ax, group)
         ax.set_xticks(range(0, 361, 90))
     if not drawn:
         plt.close(fig)
@@ -319,6 +366,5 @@ def fig_gaps(twins: list[TwinData], plateaus: list[Plateau], config) -> bytes | 
         ax.set_xlabel("shaft angle [deg]")
     for ax in grid[:, 0]:
         ax.set_ylabel("tip gap [µm]")
-    handles = {lab: h for ax in axes for h, lab in zip(*ax.get_legend_handles_labels())}
-    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(4, max(1, len(handles))))
+    _figure_legend(fig, axes, twins, any(len(g) > 1 for g in groups))
     return _png(fig)

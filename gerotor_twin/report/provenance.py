@@ -90,7 +90,8 @@ def pump_rows(ctx: ReportContext) -> list[tuple[str, str]]:
     """Pump configuration of each twin: source file, hash, key values and the calibration source."""
     rows = []
     for i, tw in enumerate(ctx.twins):
-        src = tw.parameters.get("pump_config", "").strip("'\"") or "?"
+        src = (tw.meta.get("gerotor_twin.pump_config", {}).get("path")
+               or tw.parameters.get("pump_config", "").strip("'\"") or "?")
         text = tw.pump_config_yaml
         digest = hashlib.sha256(text.encode()).hexdigest()[:16] if text else "-"
         rows.append((f"pump config {i + 1}: {tw.label}", f"{src} (sha256 of the logged YAML {digest}…)"))
