@@ -118,6 +118,11 @@ window.addEventListener('load', () => setTimeout(async () => {
       u.setCursor({left: u.bbox.width / 2 / devicePixelRatio, top: u.bbox.height / 2 / devicePixelRatio});
       rec.legend = [...el.querySelectorAll('.u-legend .u-value')].map(v => v.textContent);
       rec.fonts = u.axes.map(a => a.font[0]).concat(u.axes.map(a => a.labelFont[0]));
+      const tol = u.series.findIndex(s => s.label === 'tolerance, upper'), pl = R.spec.plateaus;
+      if (tol > 0 && pl.length > 1) {      // between two plateaus the band is a gap (null), not bridged
+        const i = u.data[0].findIndex(x => x >= (pl[0][1] + pl[1][0]) / 2);
+        rec.bandBetween = u.data[tol][i] === null ? 'gap' : String(u.data[tol][i]);
+      }
     }
     out.plots.push(rec);
   }
@@ -170,6 +175,7 @@ def test_headless_chromium_renders_every_plot(report):
         assert p["ink"] > p["inkHidden"] + 200, p     # the series themselves were drawn
         assert any(v not in ("", "–") for v in p["legend"][1:]), p    # hover shows values
         assert all(int(re.search(r"(\d+)px", f).group(1)) >= 12 for f in p["fonts"]), p
+    assert [p.get("bandBetween") for p in res["plots"]] == [None, None, "gap", "gap", "gap"]
     zmin, zmax, want_min, want_max = res["zoomSync"]
     assert zmin == pytest.approx(want_min) and zmax == pytest.approx(want_max)
     assert {a["name"] for a in res["links"]} == {"report_aligned.csv", "report_summary.csv", "report_plateaus_a.csv",

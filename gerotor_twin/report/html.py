@@ -17,7 +17,7 @@ _CSS = """
 body{font-family:system-ui,sans-serif;font-size:15px;margin:1.5em auto;max-width:1100px;padding:0 12px;color:#222}
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}h3{font-size:1.05em}
 table{border-collapse:collapse;font-size:13px;margin:0.5em 0}
-td,th{border:1px solid #bbb;padding:2px 6px;text-align:right;vertical-align:top}th{background:#eee}
+td,th{border:1px solid #bbb;padding:2px 5px;text-align:right;vertical-align:top}td.verdict{white-space:nowrap}th{background:#eee}
 td.l,th.l{text-align:left}figure{margin:0.8em 0}figcaption,.caption{font-size:13px;color:#444}
 .warn{background:#fff3cd;border:1px solid #e0c36a;padding:0.4em 0.8em}
 .headline{font-size:15px;background:#eef5ff;border:1px solid #9bc;padding:0.5em 0.9em}
@@ -27,7 +27,7 @@ tr.pass td{background:#e6f4ea}tr.fail td{background:#fde7e7}tr.nodata td{backgro
 .ts-panel{width:100%;min-height:60px}.uplot{font-family:system-ui,sans-serif}.u-legend{font-size:12px}
 .tools{font-size:13px;color:#444;margin:0.3em 0}.tools button{font-size:13px}
 .prov td.l:first-child{white-space:nowrap;color:#333}.prov td{font-size:12px;word-break:break-word}
-nav.toc{font-size:13px;columns:2}.scroll{overflow-x:auto}a.csv-link{font-size:13px}
+nav.toc{font-size:13px;columns:2}.scroll{overflow-x:auto}table.metrics td{white-space:nowrap}a.csv-link{font-size:13px}
 """
 
 
@@ -61,7 +61,8 @@ def table_html(t: Table) -> str:
             c = t.columns[k]
             text = cell(c, row[k]) or "–"
             word = text.split(" ")[0]
-            extra = f" verdict-{word.lower()}" if c.name == "verdict" and word in ("PASS", "FAIL") else ""
+            extra = (" verdict" + (f" verdict-{word.lower()}" if word in ("PASS", "FAIL") else "")
+                     if c.name == "verdict" else "")
             cells.append(f"<td class='{'l' if c.align_left else ''}{extra}'>{_e(text)}</td>")
         body.append(f"<tr{cls}>{''.join(cells)}</tr>")
     title = f"<h3>{_e(t.title)}</h3>" if t.title else ""

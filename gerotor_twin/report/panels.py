@@ -75,6 +75,7 @@ class Column:
     fmt: str = "{:.3f}"           #: HTML and CSV format of a number
     align_left: bool = False
     html: bool = True             #: shown on the page (False: CSV only, e.g. long text)
+    csv: bool = True              #: in the CSV (False: page only, e.g. a compact form of other columns)
 
 
 @dataclass(frozen=True)

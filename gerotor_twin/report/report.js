@@ -79,7 +79,8 @@
   function fmt(dec) { return (u, v) => (v == null ? "–" : v.toFixed(dec)); }
 
   function makePlot(panel, el) {
-    const data = uPlot.join(panel.series.map(s => [s.x, s.y]));
+    // NULL_EXPAND (2): a gap (null) also covers the other series' time stamps next to it
+    const data = uPlot.join(panel.series.map(s => [s.x, s.y]), panel.series.map(() => [null, 2]));
     const series = [{ label: "time [s]", value: fmt(2) }];
     for (const s of panel.series) {
       series.push({ label: s.label, stroke: s.color, width: s.width, dash: s.dash.length ? s.dash : undefined,

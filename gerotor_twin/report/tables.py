@@ -38,24 +38,25 @@ def _lpm(v):
 
 
 PLATEAU_COLUMNS = (
-    Column("plateau", "{:d}"), Column("t start [s]", "{:.1f}"), Column("t end [s]", "{:.1f}"),
+    Column("plateau", "{:d}"), Column("verdict", "{}", True), Column("t [s]", "{}", csv=False),
+    Column("t start [s]", "{:.1f}", html=False), Column("t end [s]", "{:.1f}", html=False),
     Column("speed [rpm]", "{:.0f}"), Column("delivery p [bar g]", "{:.2f}"),
     Column("flow measured [L/min]"), Column("flow predicted [L/min]"), Column("flow bias [L/min]", "{:+.3f}"),
     Column("flow RMSE [L/min]"), Column("flow max |err| [L/min]"), Column("flow tolerance ± [L/min]"),
     Column("eta_v measured [%]", "{:.2f}"), Column("eta_v predicted [%]", "{:.2f}"),
     Column("eta_v error [%-pt]", "{:+.2f}"), Column("eta_v tolerance ± [%-pt]", "{:.2f}"),
-    Column("verdict", "{}", True), Column("reason", "{}", True, html=False),
+    Column("reason", "{}", True, html=False),
 )
 
 
 def _plateau_row(r: dict, v: dict) -> tuple:
     d = None if r["eta_predicted"] is None or r["eta_measured"] is None else r["eta_predicted"] - r["eta_measured"]
     fe = r["flow_error_m3s"]
-    return (r["plateau"], r["t0_s"], r["t1_s"], r["rpm"], r["bar"], _lpm(r["flow_measured_m3s"]),
+    return (r["plateau"], v["verdict"].upper() + (f" ({', '.join(v['failed'])})" if v["failed"] else ""),
+            f"{r['t0_s']:.1f}–{r['t1_s']:.1f}", r["t0_s"], r["t1_s"], r["rpm"], r["bar"], _lpm(r["flow_measured_m3s"]),
             _lpm(r["flow_predicted_m3s"]), _lpm(fe["bias"]), _lpm(fe["rmse"]), _lpm(fe["max_abs"]),
             _lpm(v["flow_tol_m3s"]), _pct(r["eta_measured"]), _pct(r["eta_predicted"]), _pct(d),
-            _pct(v["eta_tol"]), v["verdict"].upper() + (f" ({', '.join(v['failed'])})" if v["failed"] else ""),
-            "; ".join(v["reasons"]))
+            _pct(v["eta_tol"]), "; ".join(v["reasons"]))
 
 
 def plateau_tables(ctx: ReportContext) -> list[Table]:
@@ -100,9 +101,9 @@ def cell(col: Column, v) -> str:
 def table_csv(table: Table) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow([c.name for c in table.columns])
+    w.writerow([c.name for c in table.columns if c.csv])
     for row in table.rows:
-        w.writerow([cell(c, v) for c, v in zip(table.columns, row)])
+        w.writerow([cell(c, v) for c, v in zip(table.columns, row) if c.csv])
     return buf.getvalue()
 
 
