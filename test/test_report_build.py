@@ -108,7 +108,8 @@ window.addEventListener('load', () => setTimeout(async () => {
     const u = R.plots.find(p => p.panelId === el.id);
     const rec = {id: el.id, plot: !!u, series: []};
     if (u) {
-      for (let s = 1; s < u.series.length; s++) rec.series.push([u.series[s].label, u.data[s].filter(v => v != null).length]);
+      for (let s = 1; s < u.series.length; s++)
+        rec.series.push([u.series[s].label, u.data[s].filter(v => v != null).length]);
       rec.ink = ink(u);
       for (let s = 1; s < u.series.length; s++) u.setSeries(s, {show: false});
       await tick();

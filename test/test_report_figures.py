@@ -41,7 +41,8 @@ def captured(monkeypatch):
 
     def checking_png(fig):
         shown = [ax for ax in fig.axes if ax.get_visible()]
-        seen.append(([ax.get_title() for ax in shown], readability_problems(fig), [len(ax.get_lines()) for ax in shown]))
+        seen.append(([ax.get_title() for ax in shown], readability_problems(fig),
+                     [len(ax.get_lines()) for ax in shown]))
         return png(fig)
     monkeypatch.setattr(F, "_png", checking_png)
     return seen
@@ -68,7 +69,8 @@ def test_efficiency_map_and_verdict_chart_readable_at_size(captured):
     The map's x label was cut off before (issue 14)."""
     comps = [_comp(f"a long twin label {i}", 12, 0.01 * i) for i in range(3)]
     ps = [Plateau(k + 1, 0, 1, k, k + 0.5, 1000, 5) for k in range(12)]
-    verdicts = [[{"verdict": "pass" if k % 2 else "fail", "flow_tol_m3s": 1e-5, "eta_tol": 0.01} for k in range(12)]] * 3
+    verdicts = [[{"verdict": "pass" if k % 2 else "fail", "flow_tol_m3s": 1e-5, "eta_tol": 0.01}
+                 for k in range(12)]] * 3
     assert F.fig_efficiency_map(comps) and F.fig_plateau_errors(ps, comps, verdicts)
     assert [c[1] for c in captured] == [[], []], captured
 

@@ -27,7 +27,8 @@ def _git_head():
 
 def write_logged_twin(path, duration=12.0):
     """A twin log with the metadata every node / run-bag log gets (twin_log_metadata)."""
-    meta = twin_log_metadata(PUMP_YAML.read_text(), str(PUMP_YAML), {"bearing_model": "short", "sample_period_s": 0.005})
+    meta = twin_log_metadata(PUMP_YAML.read_text(), str(PUMP_YAML),
+                             {"bearing_model": "short", "sample_period_s": 0.005})
     with McapLog(path, overwrite=True, metadata=meta) as log:
         log.add_topic("/twin/flow_summary", m.FLOAT64_MULTIARRAY)
         t = 0.0

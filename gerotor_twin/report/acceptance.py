@@ -87,7 +87,8 @@ def verdict(row: dict, crit: AcceptanceCriterion) -> dict:
     -------
     dict
         ``verdict`` (``pass`` / ``fail`` / ``no data``), ``reasons`` (list of str, why it failed or has
-        no data), ``failed`` (the checks that failed: ``flow``, ``η``, ``data``), ``flow_tol_m3s`` and ``eta_tol`` (the tolerances applied, [m³/s] and [-], or None).
+        no data), ``failed`` (the checks that failed: ``flow``, ``η``, ``data``), ``flow_tol_m3s`` and
+        ``eta_tol`` (the tolerances applied, [m³/s] and [-], or None).
     """
     q_m, q_p = row["flow_measured_m3s"], row["flow_predicted_m3s"]
     e_m, e_p = row["eta_measured"], row["eta_predicted"]

@@ -97,7 +97,8 @@ def _headline(ctx: ReportContext) -> list[str]:
     for c, vs in zip(ctx.comps, ctx.verdicts):
         fe, ee = c["overall"]["flow_error_m3s"], c["overall"]["eta_error"]
         n = {k: sum(v["verdict"] == k for v in vs) for k in (PASS, FAIL, NO_DATA)}
-        count = f"{len(vs)} plateaus: {n[PASS]} pass, {n[FAIL]} fail" + (f", {n[NO_DATA]} no data" if n[NO_DATA] else "")
+        count = (f"{len(vs)} plateaus: {n[PASS]} pass, {n[FAIL]} fail"
+                 + (f", {n[NO_DATA]} no data" if n[NO_DATA] else ""))
         if fe["n"]:
             out.append(f"{c['label']}: {count}; mean-flow error bias {fe['bias'] * LPM:+.3f} L/min, RMSE "
                        f"{fe['rmse'] * LPM:.3f} L/min, max {fe['max_abs'] * LPM:.3f} L/min; volumetric efficiency "

@@ -127,7 +127,8 @@ def fig_plateau_errors(plateaus: list[Plateau], comps: list[dict], verdicts: lis
     width = 0.5 / max(1, len(comps))
     for i, (c, vs) in enumerate(zip(comps, verdicts)):
         x = idx + (i - (len(comps) - 1) / 2) * width
-        fe = [np.nan if r["flow_error_m3s"]["bias"] is None else r["flow_error_m3s"]["bias"] * LPM for r in c["plateaus"]]
+        fe = [np.nan if r["flow_error_m3s"]["bias"] is None else r["flow_error_m3s"]["bias"] * LPM
+              for r in c["plateaus"]]
         ee = [np.nan if r["eta_predicted"] is None or r["eta_measured"] is None
               else (r["eta_predicted"] - r["eta_measured"]) * 100 for r in c["plateaus"]]
         ok = np.array([v["verdict"] == "pass" for v in vs])

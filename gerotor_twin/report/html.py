@@ -17,7 +17,8 @@ _CSS = """
 body{font-family:system-ui,sans-serif;font-size:15px;margin:1.5em auto;max-width:1100px;padding:0 12px;color:#222}
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}h3{font-size:1.05em}
 table{border-collapse:collapse;font-size:13px;margin:0.5em 0}
-td,th{border:1px solid #bbb;padding:2px 5px;text-align:right;vertical-align:top}td.verdict{white-space:nowrap}th{background:#eee}
+td,th{border:1px solid #bbb;padding:2px 5px;text-align:right;vertical-align:top}th{background:#eee}
+td.verdict{white-space:nowrap}
 td.l,th.l{text-align:left}figure{margin:0.8em 0}figcaption,.caption{font-size:13px;color:#444}
 .warn{background:#fff3cd;border:1px solid #e0c36a;padding:0.4em 0.8em}
 .headline{font-size:15px;background:#eef5ff;border:1px solid #9bc;padding:0.5em 0.9em}
@@ -68,8 +69,9 @@ def table_html(t: Table) -> str:
     title = f"<h3>{_e(t.title)}</h3>" if t.title else ""
     hidden = [c.name for c in t.columns if not c.html]
     more = f" (the CSV also has: {', '.join(hidden)})" if hidden else ""
-    return (f"{title}<div class='scroll'><table class='metrics' id='{t.id}'><tr>{head}</tr>{''.join(body)}</table></div>"
-            f"<p class='caption'>{_e(t.caption)} CSV{_e(more)}: {download_link(t.csv_name, table_csv(t), 'this table')}</p>")
+    link = download_link(t.csv_name, table_csv(t), "this table")
+    return (f"{title}<div class='scroll'><table class='metrics' id='{t.id}'><tr>{head}</tr>{''.join(body)}</table>"
+            f"</div><p class='caption'>{_e(t.caption)} CSV{_e(more)}: {link}</p>")
 
 
 def _block(b, decimation: dict[str, list[str]]) -> str:

@@ -16,7 +16,7 @@ stay visible at any length); the CSV export is not decimated.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -151,26 +151,3 @@ def plateau_steps(plateaus, values: list[float | None]) -> tuple[np.ndarray, np.
         t += [p.t0, p.t1, p.t1 + GAP_S]
         y += [v, v, np.nan]
     return np.array(t, float), np.array(y, float)
-
-
-@dataclass
-class PanelBuilder:
-    """Convenience for a :class:`TimeSeries` built trace by trace."""
-    id: str
-    heading: str
-    y_label: str
-    caption: str = ""
-    traces: list = field(default_factory=list)
-    bands: list = field(default_factory=list)
-
-    def add(self, *args, **kw) -> "PanelBuilder":
-        self.traces.append(Trace(*args, **kw))
-        return self
-
-    def band(self, *args, **kw) -> "PanelBuilder":
-        self.bands.append(Band(*args, **kw))
-        return self
-
-    def build(self, **kw) -> TimeSeries:
-        return TimeSeries(self.id, self.heading, self.y_label, tuple(self.traces), self.caption,
-                          tuple(self.bands), **kw)

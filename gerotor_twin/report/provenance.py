@@ -97,7 +97,8 @@ def pump_rows(ctx: ReportContext) -> list[tuple[str, str]]:
         rows.append((f"pump config {i + 1}: {tw.label}", f"{src} (sha256 of the logged YAML {digest}…)"))
         rows.append((f"calibration source {i + 1}", _calibration_source(text)))
     c = ctx.config
-    rows.append(("pump (config 1)", f"{c.gears.chambers} chambers, displacement {ctx.displacement_m3 * 1e6:.3f} cm³/rev, "
+    rows.append(("pump (config 1)", f"{c.gears.chambers} chambers, displacement "
+                                    f"{ctx.displacement_m3 * 1e6:.3f} cm³/rev, "
                                     f"tooth-tip clearance {c.clearances.tooth_tip_m * 1e6:.2f} µm, lateral "
                                     f"{c.clearances.lateral_m * 1e6:.2f} µm, housing radial "
                                     f"{c.clearances.housing_radial_m * 1e6:.2f} µm"))
