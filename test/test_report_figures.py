@@ -14,8 +14,22 @@ from report_helpers import write_bench, write_twin
 MIN_PX = 10.0
 
 
+def _overlapping_ticks(ax, r) -> list[str]:
+    out = []
+    for axis in (ax.xaxis, ax.yaxis):
+        lo, hi = sorted(axis.get_view_interval())
+        boxes = [lab.get_window_extent(r) for loc, lab in zip(axis.get_majorticklocs(), axis.get_majorticklabels())
+                 if lo <= loc <= hi and lab.get_visible() and lab.get_text()]
+        for a, b in zip(boxes, boxes[1:]):
+            if a.overlaps(b):
+                out.append(f"tick labels overlap on {axis.axis_name} of {ax.get_title()!r}")
+                break
+    return out
+
+
 def readability_problems(fig) -> list[str]:
-    """Text under MIN_PX, any artist outside the canvas (clipped labels), wider than the page column."""
+    """Text under MIN_PX, any artist outside the canvas (clipped labels), tick labels on top of each
+    other, wider than the page column."""
     fig.canvas.draw()
     r = fig.canvas.get_renderer()
     out = []
@@ -24,6 +38,9 @@ def readability_problems(fig) -> list[str]:
             px = t.get_fontsize() * fig.dpi / 72
             if px < MIN_PX:
                 out.append(f"text {t.get_text()!r} is {px:.1f} px")
+    for ax in fig.axes:
+        if ax.get_visible():
+            out += _overlapping_ticks(ax, r)
     tight = fig.get_tightbbox(r)                      # [in], every drawn artist
     w, h = fig.get_size_inches()
     if tight.x0 < -0.01 or tight.y0 < -0.01 or tight.x1 > w + 0.01 or tight.y1 > h + 0.01:
@@ -58,19 +75,20 @@ def test_report_figures_are_readable(tmp_path, captured):
 
 
 def _comp(label, n, shift):
-    rows = [{"rpm": 1000 + 1000 * (k % 3), "bar": 5 + 7.5 * (k // 3), "eta_measured": 0.9 - 0.01 * k,
-             "eta_predicted": 0.9 - 0.01 * k + shift, "flow_error_m3s": {"bias": shift * 1e-4},
+    rows = [{"rpm": 1000 + 1000 * (k % 3), "bar": 5 + 7.5 * (k % 12 // 3), "eta_measured": 0.9 - 0.01 * (k % 12),
+             "eta_predicted": 0.9 - 0.01 * (k % 12) + shift, "flow_error_m3s": {"bias": shift * 1e-4},
              "plateaus": k + 1} for k in range(n)]
     return {"label": label, "plateaus": rows}
 
 
-def test_efficiency_map_and_verdict_chart_readable_at_size(captured):
-    """Behaviour: 12 plateaus and three twins (four map panels, wrapped) still fit and read.
-    The map's x label was cut off before (issue 14)."""
-    comps = [_comp(f"a long twin label {i}", 12, 0.01 * i) for i in range(3)]
-    ps = [Plateau(k + 1, 0, 1, k, k + 0.5, 1000, 5) for k in range(12)]
+@pytest.mark.parametrize("n", [12, 120])
+def test_efficiency_map_and_verdict_chart_readable_at_size(captured, n):
+    """Behaviour: 12 and 120 plateaus (12 points visited 10 times) and three twins (four map panels,
+    wrapped) still fit and read. The map's x label was cut off before (issue 14)."""
+    comps = [_comp(f"a long twin label {i}", n, 0.01 * i) for i in range(3)]
+    ps = [Plateau(k + 1, 0, 1, k, k + 0.5, 1000, 5) for k in range(n)]
     verdicts = [[{"verdict": "pass" if k % 2 else "fail", "flow_tol_m3s": 1e-5, "eta_tol": 0.01}
-                 for k in range(12)]] * 3
+                 for k in range(n)]] * 3
     assert F.fig_efficiency_map(comps) and F.fig_plateau_errors(ps, comps, verdicts)
     assert [c[1] for c in captured] == [[], []], captured
 
@@ -126,6 +144,22 @@ def test_every_plateau_gets_a_waveform_and_gap_panel(tmp_path, captured):
         assert [t.split(":")[0] for t in titles[2:]] == ["#3", "#4", "#5"]
     assert n1 == [2, 2, 1, 1, 1]                                  # one mean line per visit
     assert n2 == [8, 8, 7, 7, 7]                                  # + the 6 other gaps once per panel
+
+
+def test_efficiency_map_shows_the_mean_of_repeated_visits(captured, monkeypatch):
+    """Closed form: two visits of one point with η 90 % and 92 % are one marker labelled 91.0 (2×)."""
+    rows = [{"rpm": 1000, "bar": 5.0, "eta_measured": 0.90, "eta_predicted": 0.90},
+            {"rpm": 2000, "bar": 5.0, "eta_measured": 0.95, "eta_predicted": 0.95},
+            {"rpm": 1005, "bar": 5.1, "eta_measured": 0.92, "eta_predicted": 0.92}]
+    import matplotlib.axes
+    texts, orig = [], matplotlib.axes.Axes.annotate
+
+    def spy(self, text, *a, **k):
+        texts.append(text)
+        return orig(self, text, *a, **k)
+    monkeypatch.setattr(matplotlib.axes.Axes, "annotate", spy)
+    F.fig_efficiency_map([{"label": "t", "plateaus": rows}])
+    assert texts == ["91.0 (2×)", "95.0"] * 2
 
 
 def test_group_plateaus():

@@ -20,7 +20,7 @@ from .analysis import Plateau, revolution_phase  # noqa: E402
 from .data import TwinData  # noqa: E402
 
 __all__ = ["fig_efficiency_map", "fig_plateau_errors", "fig_waveforms", "fig_trajectory", "fig_gaps",
-           "gap_profile", "group_plateaus", "folded_waveform", "RC", "DPI", "MAX_WIDTH_IN"]
+           "gap_profile", "group_points", "group_plateaus", "folded_waveform", "RC", "DPI", "MAX_WIDTH_IN"]
 
 LPM = 6e4          # m³/s -> L/min
 _STYLES = ("-", "--", ":", "-.")
@@ -75,15 +75,26 @@ def _multiples(n: int, height_in: float = 2.5):
 
 @_styled
 def fig_efficiency_map(comps: list[dict]) -> bytes:
-    """Volumetric efficiency per plateau over (speed, pressure): measured and each prediction."""
+    """Volumetric efficiency per operating point over (speed, pressure): measured and each prediction.
+
+    Repeated visits of a point (:func:`group_points`) are shown as their mean, labelled ``(n×)``.
+    """
     n = 1 + len(comps)
     ncols = min(n, 3)
     nrows = math.ceil(n / ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(min(MAX_WIDTH_IN, 3.5 * ncols + 1.2), 3.7 * nrows),
                              sharex=True, sharey=True, squeeze=False)
     rows = comps[0]["plateaus"] if comps else []
-    panels = [("measured", [r["eta_measured"] for r in rows])]
-    panels += [(f"predicted: {c['label']}", [r["eta_predicted"] for r in c["plateaus"]]) for c in comps]
+    groups = group_points([r["rpm"] for r in rows], [r["bar"] for r in rows])
+
+    def means(vals):
+        out = []
+        for g in groups:
+            v = [vals[i] for i in g if vals[i] is not None]
+            out.append(float(np.mean(v)) if v else None)
+        return out
+    panels = [("measured", means([r["eta_measured"] for r in rows]))]
+    panels += [(f"predicted: {c['label']}", means([r["eta_predicted"] for r in c["plateaus"]])) for c in comps]
     vals = [v for _, vs in panels for v in vs if v is not None]
     vmin, vmax = (min(vals) * 100, max(vals) * 100) if vals else (0, 100)
     sc = None
@@ -91,12 +102,13 @@ def fig_efficiency_map(comps: list[dict]) -> bytes:
     for ax in flat[n:]:
         ax.set_visible(False)
     for ax, (title, vs) in zip(flat, panels):
-        x = [r["rpm"] for r in rows]
-        y = [r["bar"] for r in rows]
+        x = [np.mean([rows[i]["rpm"] for i in g]) for g in groups]
+        y = [np.mean([rows[i]["bar"] for i in g]) for g in groups]
         z = [np.nan if v is None else v * 100 for v in vs]
         sc = ax.scatter(x, y, c=z, s=200, cmap="viridis", vmin=vmin, vmax=vmax, edgecolor="k")
-        for xi, yi, zi in zip(x, y, z):
-            ax.annotate(f"{zi:.1f}", (xi, yi), textcoords="offset points", xytext=(0, 9), ha="center", fontsize=9)
+        for xi, yi, zi, g in zip(x, y, z, groups):
+            ax.annotate(f"{zi:.1f}" + (f" ({len(g)}×)" if len(g) > 1 else ""), (xi, yi), textcoords="offset points",
+                        xytext=(0, 9), ha="center", fontsize=9)
         ax.set_title(title)
         ax.margins(0.15, 0.2)
     for ax in axes[-1]:
@@ -139,23 +151,31 @@ def fig_plateau_errors(plateaus: list[Plateau], comps: list[dict], verdicts: lis
     a1.set_ylabel("mean flow error [L/min]")
     a2.set_ylabel("η$_v$ error [%-pt]")
     a2.set_xlabel("plateau")
-    a2.set_xticks(idx)
+    if len(idx) <= 30:
+        a2.set_xticks(idx)
+    else:
+        a2.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=20, integer=True))
     fig.legend(*a1.get_legend_handles_labels(), loc="outside lower center", ncols=min(3, 1 + 2 * len(comps)))
     return _png(fig)
 
 
-def group_plateaus(plateaus: list[Plateau], rpm_rel: float = 0.02, bar_abs: float = 0.5) -> list[list[Plateau]]:
-    """Plateaus at the same operating point (speed within ``rpm_rel`` [-], pressure within ``bar_abs``
-    [bar] of the group's first visit), in order of first visit; each group keeps time order."""
-    groups: list[list[Plateau]] = []
-    for p in plateaus:
+def group_points(rpm: list[float], bar: list[float], rpm_rel: float = 0.02, bar_abs: float = 0.5) -> list[list[int]]:
+    """Indices of the same operating point (speed within ``rpm_rel`` [-], pressure within ``bar_abs``
+    [bar] of the group's first visit), in order of first visit; each group keeps its order."""
+    groups: list[list[int]] = []
+    for i, (r, b) in enumerate(zip(rpm, bar)):
         for g in groups:
-            if abs(p.rpm - g[0].rpm) <= rpm_rel * max(abs(g[0].rpm), 1.0) and abs(p.bar - g[0].bar) <= bar_abs:
-                g.append(p)
+            if abs(r - rpm[g[0]]) <= rpm_rel * max(abs(rpm[g[0]]), 1.0) and abs(b - bar[g[0]]) <= bar_abs:
+                g.append(i)
                 break
         else:
-            groups.append([p])
+            groups.append([i])
     return groups
+
+
+def group_plateaus(plateaus: list[Plateau]) -> list[list[Plateau]]:
+    """Plateaus grouped by operating point (:func:`group_points`)."""
+    return [[plateaus[i] for i in g] for g in group_points([p.rpm for p in plateaus], [p.bar for p in plateaus])]
 
 
 def _group_title(ax, group: list[Plateau], extra: str = "") -> None:
