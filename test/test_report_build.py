@@ -1,4 +1,5 @@
 """The HTML report: self-contained, every figure present, JSON metrics, rendered by headless Chromium."""
+import csv
 import html
 import json
 import re
@@ -183,3 +184,36 @@ def test_headless_chromium_renders_every_plot(report):
                                                  "report_plateaus_b.csv"}
     assert all(a["href"].startswith("data:text/csv") for a in res["links"])
     assert res["resources"] == []
+
+
+def test_a_new_plot_and_table_are_one_function_each(tmp_path, monkeypatch):
+    """Behaviour: a block function added to ``layout.PAGE`` is on the page, its grid trace becomes a
+    column of the aligned CSV, its table gets a CSV; in Chromium it draws (with a shaded interval)
+    without an error."""
+    from gerotor_twin.report import layout
+    from gerotor_twin.report.panels import Column, Interval, Table, TimeSeries, Trace
+    from gerotor_twin.units import rad_s_to_rpm
+
+    def ts_extra(ctx):
+        return TimeSeries("ts-extra", "Extra", "doubled speed [rpm]",
+                          (Trace("2 × speed", ctx.grid.t, 2 * rad_s_to_rpm(ctx.grid.omega),
+                                 csv="doubled speed [rpm]"),),
+                          intervals=(Interval(2.0, 4.0, "alarm"),))
+
+    def tab_extra(ctx):
+        return Table("tab-extra", "Extra", (Column("k", "{:d}"), Column("v [-]")), ((1, 0.5), (2, 0.25)),
+                     "extra.csv")
+
+    monkeypatch.setattr(layout, "PAGE", layout.PAGE + [ts_extra, tab_extra])
+    out = tmp_path / "r.html"
+    res = build_report(write_bench(tmp_path / "b.mcap"), [write_twin(tmp_path / "t.mcap")], out,
+                       csv_dir=tmp_path / "csv")
+    assert res["interactive_plots"] == len(TS_IDS) + 1 and "extra.csv" in res["downloads"]
+    assert (tmp_path / "csv" / "extra.csv").read_text() == "k,v [-]\n1,0.500\n2,0.250\n"
+    rows = list(csv.DictReader(open(tmp_path / "csv" / "r_aligned.csv")))
+    assert all(float(r["doubled speed [rpm]"]) == pytest.approx(2 * float(r["speed [rpm]"]), rel=1e-5) for r in rows)
+    if _chromium():
+        probe = run_probe(out, tmp_path)
+        assert probe["errors"] == []
+        extra = [p for p in probe["plots"] if p["id"] == "ts-extra"][0]
+        assert extra["plot"] and extra["ink"] > extra["inkHidden"] + 200

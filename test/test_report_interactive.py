@@ -11,7 +11,7 @@ import pytest
 
 from gerotor_twin.report.build import build_report
 from gerotor_twin.report.interactive import UPLOT_VERSION, assets, panel_data
-from gerotor_twin.report.panels import Band, TimeSeries, Trace, envelope, plateau_steps
+from gerotor_twin.report.panels import Band, Interval, TimeSeries, Trace, envelope, plateau_steps
 from gerotor_twin.report.tables import csv_data_uri
 from report_helpers import DISP, write_bench, write_twin
 
@@ -48,13 +48,15 @@ def test_panel_data_budget_and_bands():
     point budget; a tolerance band becomes two series and a fill."""
     t = np.linspace(0, 100, 50_001)
     band_t, hi = plateau_steps([type("P", (), {"t0": 1.0, "t1": 2.0})()], [1.0])
-    panel = TimeSeries("x", "h", "q [L/min]", (Trace("raw", t, np.cos(t)),), bands=(Band("tol", band_t, -hi, hi),))
+    panel = TimeSeries("x", "h", "q [L/min]", (Trace("raw", t, np.cos(t)),), bands=(Band("tol", band_t, -hi, hi),),
+                       intervals=(Interval(3.0, 4.5, "alarm", "red"),))
     p = panel_data(panel, 1000)
     labels = [s["label"] for s in p["series"]]
     assert labels == ["raw, max", "raw, min", "tol, upper", "tol, lower"]
     assert [b[:2] for b in p["bands"]] == [[1, 2], [3, 4]]
     assert all(len(s["x"]) <= 1000 for s in p["series"])
     assert p["series"][3]["y"] == [-1.0, -1.0, None] and "50001 samples" in p["decimation"][0]
+    assert p["intervals"] == [[3.0, 4.5, "alarm", "red"]]
 
 
 def test_vendored_uplot_is_the_recorded_release():

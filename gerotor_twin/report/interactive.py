@@ -74,7 +74,8 @@ def panel_data(panel: TimeSeries, max_points: int = DEFAULT_MAX_POINTS) -> dict:
         series.append(_series(f"{b.label}, lower", b.t, b.lo, b.edge, 1.0, (4, 3), 3))
         bands.append([i, i + 1, b.color])
     return {"id": panel.id, "ylabel": panel.y_label, "height": panel.height, "zero": panel.zero_line,
-            "series": series, "bands": bands, "decimation": notes}
+            "series": series, "bands": bands, "decimation": notes,
+            "intervals": [[float(iv.t0), float(iv.t1), iv.label, iv.color] for iv in panel.intervals]}
 
 
 def data_script(panels: list[dict], plateaus, span: tuple[float, float]) -> str:

@@ -4,7 +4,8 @@ A page is a list of blocks, each rendered by :mod:`.html`:
 
 * :class:`TimeSeries`: an interactive plot over time (uPlot in the page: zoom, pan,
   hover values; all time plots share the cursor and the x range) built from
-  :class:`Trace` objects, with optional tolerance :class:`Band` s.
+  :class:`Trace` objects, with optional tolerance :class:`Band` s and shaded
+  :class:`Interval` s (e.g. alarm intervals).
 * :class:`Table`: columns with units; every table gets a CSV download link.
 * :class:`Image`: a static matplotlib PNG (or the reason it is absent).
 
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Trace", "Band", "TimeSeries", "Table", "Column", "Image", "envelope", "DEFAULT_MAX_POINTS"]
+__all__ = ["Trace", "Band", "Interval", "TimeSeries", "Table", "Column", "Image", "envelope", "DEFAULT_MAX_POINTS"]
 
 #: Largest number of points per trace in an interactive plot (default of ``--max-points``).
 DEFAULT_MAX_POINTS = 4000
@@ -57,6 +58,15 @@ class Band:
 
 
 @dataclass(frozen=True)
+class Interval:
+    """A shaded time span of one plot (e.g. an alarm), labelled at its top."""
+    t0: float                     #: [s]
+    t1: float                     #: [s]
+    label: str = ""
+    color: str = "rgba(220,50,40,0.15)"
+
+
+@dataclass(frozen=True)
 class TimeSeries:
     """An interactive time plot."""
     id: str
@@ -67,6 +77,7 @@ class TimeSeries:
     bands: tuple[Band, ...] = ()
     height: int = 260             #: [px]
     zero_line: bool = False
+    intervals: tuple[Interval, ...] = ()   #: shaded spans of this plot (the plateaus are shaded in every plot)
 
 
 @dataclass(frozen=True)

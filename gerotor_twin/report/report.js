@@ -11,18 +11,19 @@
   const FONT = "12px system-ui, sans-serif";
   const LABEL_FONT = "bold 13px system-ui, sans-serif";
 
-  function plateauPlugin() {
+  // shaded spans [t0, t1, label, fill]: the plateaus in every plot, a panel's own intervals (e.g. alarms)
+  function spansPlugin(spans) {
     return { hooks: { drawClear: u => {
       const ctx = u.ctx, r = devicePixelRatio || 1;
       const { left, top, width, height } = u.bbox;
       ctx.save();
-      for (const [t0, t1, label] of spec.plateaus) {
+      for (const [t0, t1, label, fill] of spans) {
         let x0 = u.valToPos(t0, "x", true), x1 = u.valToPos(t1, "x", true);
         if (x1 < left || x0 > left + width) continue;
         x0 = Math.max(x0, left); x1 = Math.min(x1, left + width);
-        ctx.fillStyle = "rgba(0,0,0,0.07)";
-        ctx.fillRect(x0, top, x1 - x0, height);
-        if (x1 - x0 > 16 * r) {
+        ctx.fillStyle = fill;
+        ctx.fillRect(x0, top, Math.max(x1 - x0, r), height);
+        if (label && x1 - x0 > 16 * r) {
           ctx.fillStyle = "#333";
           ctx.font = Math.round(12 * r) + "px system-ui, sans-serif";
           ctx.textAlign = "center"; ctx.textBaseline = "top";
@@ -97,7 +98,8 @@
       ],
       cursor: { sync: { key: "gerotor-time" }, drag: { x: true, y: false } },
       legend: { live: true },
-      plugins: [plateauPlugin(), wheelPanPlugin()],
+      plugins: [spansPlugin(spec.plateaus.map(p => [p[0], p[1], p[2], "rgba(0,0,0,0.07)"]).concat(panel.intervals)),
+                wheelPanPlugin()],
       hooks: { setScale: [(u, key) => {
         if (key !== "x" || syncing) return;
         syncing = true;
