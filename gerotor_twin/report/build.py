@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -180,7 +179,7 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
 
 def _num(v):
     if isinstance(v, (np.floating, np.integer)):
-        return v.item() if math.isfinite(float(v)) else None
+        return v.item()
     raise TypeError(type(v).__name__)
 
 
