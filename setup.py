@@ -16,7 +16,7 @@ setup(
         (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
         (f"share/{PACKAGE}/layouts", glob("layouts/*.json") + glob("layouts/*.xml")),
     ],
-    package_data={PACKAGE: ["data/*.yaml", "data/*.json"]},
+    package_data={PACKAGE: ["data/*.yaml", "data/*.json", "report/report.js", "report/vendor/uplot/*"]},
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="gerotor_twin team",

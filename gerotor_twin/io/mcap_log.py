@@ -63,10 +63,13 @@ def twin_log_metadata(config_yaml: str, config_source: str, parameters: dict,
 
     ``gerotor_twin.pump_config``: the pump YAML text and where it came from;
     ``gerotor_twin.node_parameters``: one key per parameter, the value as text
-    (strings quoted, as ``repr``); ``extra``: further records by name.
+    (strings quoted, as ``repr``); ``gerotor_twin.software``: version and git revision
+    (:func:`gerotor_twin.software.software_identity`); ``extra``: further records by name.
     """
+    from gerotor_twin.software import SOFTWARE_METADATA, software_identity
     meta = {PUMP_CONFIG_METADATA: {"yaml": config_yaml, "path": str(config_source)},
-            NODE_PARAMETERS_METADATA: {k: repr(v) if isinstance(v, str) else str(v) for k, v in parameters.items()}}
+            NODE_PARAMETERS_METADATA: {k: repr(v) if isinstance(v, str) else str(v) for k, v in parameters.items()},
+            SOFTWARE_METADATA: dict(software_identity())}
     meta.update(extra or {})
     return meta
 

@@ -158,7 +158,7 @@ def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3
     for p in plateaus:
         s = slice(p.i0, p.i1)
         sel.append(np.arange(p.i0, p.i1))
-        rows.append({"plateau": p.index, "t0_s": p.t0, "t1_s": p.t1, "rpm": p.rpm, "bar": p.bar,
+        rows.append({"plateau": p.index, "t0_s": p.t0, "t1_s": p.t1, "rpm": p.rpm, "bar": p.bar, "bins": p.i1 - p.i0,
                      "flow_measured_m3s": float(np.nanmean(grid.q_meas[s])),
                      "flow_predicted_m3s": _nanmean(q_pred[s]),
                      "eta_measured": _nanmean(eta_meas[s]), "eta_predicted": _nanmean(eta_pred[s]),

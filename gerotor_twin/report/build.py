@@ -1,4 +1,4 @@
-"""``gerotor-twin report``: bench recording vs one or more twin logs -> HTML page and JSON metrics."""
+"""``gerotor-twin report``: bench recording vs one or more twin logs -> HTML page, CSV and JSON metrics."""
 from __future__ import annotations
 
 import json
@@ -8,10 +8,17 @@ import numpy as np
 
 from gerotor_twin.errors import InputError, one_line
 
-from . import figures as F
+from . import layout
+from .acceptance import FAIL, NO_DATA, PASS, AcceptanceCriterion, add_arguments, criterion_from_args, verdict
 from .analysis import compare, find_plateaus, make_grid
+from .context import ReportContext
 from .data import load_bench, load_twin, overlap, pump_config
-from .html import figure, render
+from .html import render
+from .interactive import panel_data
+from .panels import DEFAULT_MAX_POINTS, Table, TimeSeries
+from .provenance import provenance
+from .tables import aligned_csv, table_csv
+from .timeseries import plateau_index
 
 __all__ = ["build_report", "add_parser", "DEFINITIONS"]
 
@@ -24,9 +31,14 @@ DEFINITIONS = (
     "(twin/flow_summary) against the bench flow meter. Measured volumetric efficiency = measured flow / "
     "(displacement x measured speed / 2 pi), displacement from the twin's pump configuration; predicted = "
     "the twin's. Bias = mean error, RMSE = root mean square error, max |err| = largest absolute error over "
-    "the bins of a plateau; 'all plateau samples' pools every plateau bin; 'whole run' uses every bin, "
-    "transitions included (there the flow meter's own lag shows). Chamber pressure vs angle: the twin's "
-    "once-per-revolution waveform nearest the middle of the plateau. Tooth-gap heights: the twin's logged "
+    "the bins of a plateau; 'all plateaus' pools every plateau bin; 'whole run' uses every bin, "
+    "transitions included (there the flow meter's own lag shows). Verdict: a plateau passes when its mean "
+    "errors lie inside the tolerances of the acceptance criterion stated above the tables (defaults in "
+    "docs/offline.md; set with --tol-flow-lpm, --tol-flow-rel, --tol-eta-pts or --acceptance F.yaml); "
+    "'no data' when too few of its bins have a prediction. Interactive plots: traces longer than the point "
+    "budget (--max-points) are drawn as the minimum and maximum of equal-time buckets; the CSV files hold "
+    "the full 0.1 s grid. Chamber pressure vs angle: every once-per-revolution waveform the twin logged "
+    "inside the plateau, folded onto one revolution (mean and min-max). Tooth-gap heights: the twin's logged "
     "outer-gear displacement folded onto one revolution (angle from the revolution stamps of "
     "twin/flow_summary), gaps computed from the pump geometry with the model's own contact routine.")
 
@@ -35,28 +47,7 @@ def _json_ready(comp: dict) -> dict:
     return {k: v for k, v in comp.items() if not isinstance(v, np.ndarray)}
 
 
-def build_report(bench_path, twin_paths, output, json_path=None, labels=None, title=None) -> dict:
-    """Write the HTML report (and JSON metrics); return the metrics dict.
-
-    Parameters
-    ----------
-    bench_path : path
-        Bench recording (MCAP with the bench topics).
-    twin_paths : list of path
-        One or more twin logs (node MCAP or ``run-bag`` output).
-    output : path
-        HTML file to write.
-    json_path : path, optional
-        JSON metrics file (SI units; key names carry them).
-    labels : list of str, optional
-        Legend label per twin file (default: its bearing model or file stem).
-
-    Raises
-    ------
-    McapReadError
-        A file is missing, truncated beyond its header, corrupt, lacks a required topic, has a
-        wrong type, or does not overlap the bench in time.
-    """
+def _load(bench_path, twin_paths, labels):
     if not twin_paths:
         raise InputError("--twin", [], "one or more twin MCAP files")
     if labels and len(labels) != len(twin_paths):
@@ -68,68 +59,118 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
         if tw.label in seen:
             tw.label = f"{tw.label} [{i + 1}]"
         seen[tw.label] = i
+    return bench, twins
+
+
+def make_context(bench, twins, criterion: AcceptanceCriterion, stem: str,
+                 max_points: int = DEFAULT_MAX_POINTS) -> ReportContext:
+    """Grid, plateaus, metrics and verdicts of a bench recording against twin logs."""
     span = overlap(bench, twins)
     grid = make_grid(bench, span)
     cfg = pump_config(twins[0])
     plateaus = find_plateaus(grid, p_atm=cfg.fluid.atmospheric_pa)
     disp = cfg.gears.displacement_closed_form()
     comps = [compare(grid, plateaus, tw, disp) for tw in twins]
-    chosen = F.choose_plateaus(plateaus)
+    verdicts = tuple(tuple(verdict(r, criterion) for r in c["plateaus"]) for c in comps)
+    return ReportContext(bench, tuple(twins), grid, tuple(plateaus), tuple(comps), verdicts, cfg, disp, criterion,
+                         span, stem, max_points)
 
-    notes = [w for w in bench.warnings] + [w for tw in twins for w in tw.warnings]
-    for tw in twins:
+
+def _notes(ctx: ReportContext) -> list[str]:
+    notes = list(ctx.bench.warnings) + [w for tw in ctx.twins for w in tw.warnings]
+    for tw in ctx.twins:
         if tw.missing:
             notes.append(f"{tw.path}: optional topics absent, their figures are skipped: {', '.join(tw.missing)}")
         if not tw.pump_config_yaml:
             notes.append(f"{tw.path}: no pump configuration in the metadata; config/pump.yaml is assumed")
-    if not plateaus:
-        notes.append("no steady plateau found: per-plateau metrics and angle plots are empty")
-    synthetic = bench.meta.get("gerotor_twin.bench_emulator", {}).get("synthetic") == "true"
-    if synthetic:
-        notes.append(f"{bench.path} is a SYNTHETIC recording made by `gerotor-twin synth-bench` "
+    if not ctx.plateaus:
+        notes.append("no steady plateau found: per-plateau metrics, verdicts and angle plots are empty")
+    if ctx.bench.meta.get("gerotor_twin.bench_emulator", {}).get("synthetic") == "true":
+        notes.append(f"{ctx.bench.path} is a SYNTHETIC recording made by `gerotor-twin synth-bench` "
                      "(bench emulator, see bags/README.md), not measured data.")
-    why = "no twin file has the topic"
-    figs = [
-        figure(F.fig_operating(bench, grid, plateaus), "fig-operating",
-               "Bench shaft speed and delivery pressure; grey: detected plateaus (numbered)."),
-        figure(F.fig_flow(grid, plateaus, comps), "fig-flow",
-               "Mean delivery flow, measured (flow meter) vs predicted (twin revolution means), and residual."),
-        figure(F.fig_efficiency_map(comps) if plateaus else None, "fig-eta-map",
-               "Volumetric efficiency per plateau [%]: measured and predicted.", "no plateaus"),
-        figure(F.fig_waveforms(twins, chosen), "fig-waveform",
-               "Predicted chamber-1 pressure over one revolution at chosen plateaus.",
-               "no plateaus" if not chosen else f"{why} /twin/chamber_waveform"),
-        figure(F.fig_trajectory(twins, plateaus, cfg.clearances.housing_radial_m), "fig-trajectory",
-               "Predicted outer-gear centre displacement inside the radial clearance circle.",
-               f"{why} /twin/eccentricity"),
-        figure(F.fig_gaps(twins, chosen, cfg), "fig-gaps",
-               "Tooth-tip gap heights over one revolution at chosen plateaus (bold: gap 1).",
-               "no plateaus" if not chosen else f"{why} /twin/eccentricity"),
-    ]
-    headline = []
-    for c in comps:
-        o = c["overall"]
-        fe, ee = o["flow_error_m3s"], o["eta_error"]
+    return notes
+
+
+def _headline(ctx: ReportContext) -> list[str]:
+    out = []
+    for c, vs in zip(ctx.comps, ctx.verdicts):
+        fe, ee = c["overall"]["flow_error_m3s"], c["overall"]["eta_error"]
+        n = {k: sum(v["verdict"] == k for v in vs) for k in (PASS, FAIL, NO_DATA)}
+        count = (f"{len(vs)} plateaus: {n[PASS]} pass, {n[FAIL]} fail"
+                 + (f", {n[NO_DATA]} no data" if n[NO_DATA] else ""))
         if fe["n"]:
-            headline.append(f"{c['label']}: {len(c['plateaus'])} plateaus; mean-flow error bias "
-                            f"{fe['bias'] * LPM:+.3f} L/min, RMSE {fe['rmse'] * LPM:.3f} L/min, max "
-                            f"{fe['max_abs'] * LPM:.3f} L/min; volumetric efficiency bias {ee['bias'] * 100:+.2f} "
-                            f"%-pt, RMSE {ee['rmse'] * 100:.2f} %-pt")
+            out.append(f"{c['label']}: {count}; mean-flow error bias {fe['bias'] * LPM:+.3f} L/min, RMSE "
+                       f"{fe['rmse'] * LPM:.3f} L/min, max {fe['max_abs'] * LPM:.3f} L/min; volumetric efficiency "
+                       f"bias {ee['bias'] * 100:+.2f} %-pt, RMSE {ee['rmse'] * 100:.2f} %-pt")
         else:
-            headline.append(f"{c['label']}: no plateau samples to compare")
-    files = [{"role": "bench", "path": bench.path,
-              "info": f"{len(bench.speed[0])} speed, {len(bench.delivery_pressure[0])} pressure, "
-                      f"{len(bench.flow[0])} flow samples; {bench.span[1] - bench.span[0]:.1f} s"
-                      + (" (synthetic)" if synthetic else "")}]
-    files += [{"role": f"twin: {tw.label}", "path": tw.path,
-               "info": f"{len(tw.summary[0])} revolution summaries; {tw.span[1] - tw.span[0]:.1f} s"} for tw in twins]
-    page = render(title or f"Twin vs bench: {Path(bench.path).name}", files, notes, headline, figs, comps,
-                  DEFINITIONS)
+            out.append(f"{c['label']}: no plateau samples to compare")
+    out.append(f"Acceptance criterion: {ctx.criterion.describe()}.")
+    return out
+
+
+def _downloads(ctx: ReportContext, blocks: list) -> list[tuple[str, str, str]]:
+    panels = [b for b in blocks if isinstance(b, TimeSeries)]
+    out = [(f"{ctx.stem}_aligned.csv", aligned_csv(ctx, panels, plateau_index(ctx)),
+            f"every series on the common {ctx.grid_dt:g} s grid, plateau number per row")]
+    out += [(t.csv_name, table_csv(t), f"table: {t.title or t.heading}") for t in blocks if isinstance(t, Table)]
+    return out
+
+
+def build_report(bench_path, twin_paths, output, json_path=None, labels=None, title=None,
+                 criterion: AcceptanceCriterion | None = None, max_points: int = DEFAULT_MAX_POINTS,
+                 csv_dir=None) -> dict:
+    """Write the HTML report (and JSON metrics, and optionally the CSV files); return the metrics dict.
+
+    Parameters
+    ----------
+    bench_path : path
+        Bench recording (MCAP with the bench topics).
+    twin_paths : list of path
+        One or more twin logs (node MCAP or ``run-bag`` output).
+    output : path
+        HTML file to write (self-contained; its CSV downloads are embedded as data: URIs).
+    json_path : path, optional
+        JSON metrics file (SI units; key names carry them).
+    labels : list of str, optional
+        Legend label per twin file (default: its bearing model or file stem).
+    criterion : AcceptanceCriterion, optional
+        Tolerances of the per-plateau verdict (default: :class:`AcceptanceCriterion` defaults).
+    max_points : int
+        Point budget per trace of the interactive plots (longer traces become min/max envelopes).
+    csv_dir : path, optional
+        Also write the CSV files (the page's downloads) into this directory.
+
+    Raises
+    ------
+    McapReadError
+        A file is missing, truncated beyond its header, corrupt, lacks a required topic, has a
+        wrong type, or does not overlap the bench in time.
+    InputError
+        Bad labels or ``max_points``.
+    """
+    if not isinstance(max_points, int) or max_points < 100:
+        raise InputError("--max-points", max_points, "an integer >= 100")
+    bench, twins = _load(bench_path, twin_paths, labels)
+    ctx = make_context(bench, twins, criterion or AcceptanceCriterion(), Path(output).stem, max_points)
+    blocks = layout.blocks(ctx)
+    specs = [panel_data(b, max_points) for b in blocks if isinstance(b, TimeSeries)]
+    downloads = _downloads(ctx, blocks)
+    notes, headline = _notes(ctx), _headline(ctx)
+    page = render(title or f"Twin vs bench: {Path(bench.path).name}", headline, notes, blocks, specs,
+                  ctx.plateaus, ctx.span, provenance(ctx), downloads, DEFINITIONS)
     Path(output).parent.mkdir(parents=True, exist_ok=True)
     Path(output).write_text(page, encoding="utf-8")
-    result = {"bench": bench.path, "span_s": list(span), "displacement_m3": disp,
-              "plateaus": [p.__dict__ for p in plateaus], "twins": [_json_ready(c) for c in comps],
-              "headline": headline, "notes": notes, "figures_drawn": sum('class="report-figure"' in f for f in figs)}
+    if csv_dir:
+        Path(csv_dir).mkdir(parents=True, exist_ok=True)
+        for name, text, _ in downloads:
+            (Path(csv_dir) / name).write_text(text, encoding="utf-8")
+    result = {"bench": bench.path, "span_s": list(ctx.span), "displacement_m3": ctx.displacement_m3,
+              "plateaus": [p.__dict__ for p in ctx.plateaus], "twins": [_json_ready(c) for c in ctx.comps],
+              "acceptance": ctx.criterion.as_dict(),
+              "verdicts": [[dict(v, plateau=p.index) for v, p in zip(vs, ctx.plateaus)] for vs in ctx.verdicts],
+              "headline": headline, "notes": notes, "downloads": [n for n, _, _ in downloads],
+              "figures_drawn": sum(1 for b in blocks if getattr(b, "png", None) is not None),
+              "interactive_plots": len(specs), "html_bytes": len(page.encode("utf-8"))}
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps(result, indent=2, default=_num))
@@ -145,28 +186,39 @@ def _num(v):
 def cmd_report(args) -> int:
     import sys
     from gerotor_twin.io import McapReadError
+    crit = criterion_from_args(args)
     try:
-        res = build_report(args.bench, args.twin, args.output, args.json, args.label)
+        res = build_report(args.bench, args.twin, args.output, args.json, args.label, criterion=crit,
+                           max_points=args.max_points, csv_dir=args.csv_dir)
     except McapReadError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
-    print(f"wrote {args.output}" + (f" and {args.json}" if args.json else ""))
+    print(f"wrote {args.output}" + (f" and {args.json}" if args.json else "")
+          + (f"; CSV in {args.csv_dir}" if args.csv_dir else ""))
     for n in res["notes"]:
         print(f"note: {n}", file=sys.stderr)
     for h in res["headline"]:
         print(h)
-    return 0
+    failed = any(v["verdict"] != PASS for vs in res["verdicts"] for v in vs)
+    return 1 if args.check and (failed or not res["plateaus"]) else 0
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("report", help="HTML comparison report: bench recording vs twin log(s)",
                        description="Align bench and twin series by time, detect steady plateaus, compute "
-                                   "error metrics and write one self-contained HTML page.")
+                                   "error metrics and a pass/fail verdict per plateau, and write one "
+                                   "self-contained, interactive HTML page (works offline; CSV downloads inside).")
     p.add_argument("--bench", required=True, help="bench recording (MCAP)")
     p.add_argument("--twin", required=True, action="append",
                    help="twin log (node MCAP or run-bag output); give twice to compare models")
     p.add_argument("--label", action="append", help="legend label per --twin (same order)")
     p.add_argument("-o", "--output", required=True, help="HTML file to write")
     p.add_argument("--json", metavar="F", help="also write the metrics to this JSON file (SI units)")
+    p.add_argument("--csv-dir", metavar="DIR", help="also write the page's CSV files into DIR")
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N",
+                   help=f"points per trace in the interactive plots; longer traces are drawn as min/max "
+                        f"envelopes (default {DEFAULT_MAX_POINTS})")
+    p.add_argument("--check", action="store_true",
+                   help="exit with status 1 unless every plateau passes the acceptance criterion")
+    add_arguments(p)
     p.set_defaults(func=cmd_report)
-

@@ -50,6 +50,7 @@ class BenchData:
     temperature: tuple[np.ndarray, np.ndarray] | None = None
     warnings: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+    library: str = ""                                #: MCAP header: the writing library
 
     @property
     def span(self) -> tuple[float, float]:
@@ -71,6 +72,8 @@ class TwinData:
     parameters: dict = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    meta: dict = field(default_factory=dict)         #: the log's metadata records
+    library: str = ""                                #: MCAP header: the writing library
 
     @property
     def span(self) -> tuple[float, float]:
@@ -151,7 +154,7 @@ def load_bench(path: str | Path) -> BenchData:
                      delivery_pressure=scalar_series(s["/bench/delivery_pressure"], "fluid_pressure", t0_ns=t0),
                      flow=scalar_series(s["/bench/delivery_flow"], "data", t0_ns=t0),
                      suction_pressure=opt["/bench/suction_pressure"], temperature=opt["/bench/oil_temperature"],
-                     warnings=notes, meta=dict(f.metadata))
+                     warnings=notes, meta=dict(f.metadata), library=f.library or "")
 
 
 def load_twin(path: str | Path, t0_ns: int, label: str | None = None) -> TwinData:
@@ -177,7 +180,7 @@ def load_twin(path: str | Path, t0_ns: int, label: str | None = None) -> TwinDat
     model = (params.get("bearing_model") or meta.get("gerotor_twin.run_bag", {}).get("model") or "").strip("'\"")
     data = TwinData(path=str(path), label=label or (f"twin ({model})" if model else Path(path).stem),
                     summary=(t, v[:, :4]), pump_config_yaml=cfg, parameters=dict(params),
-                    missing=missing, warnings=notes)
+                    missing=missing, warnings=notes, meta=dict(meta), library=f.library or "")
     for topic, attr in (("/twin/delivery_flow", "flow"), ("/twin/eccentricity", None),
                         ("/twin/tooth_gaps", "gaps"), ("/twin/chamber_waveform", "waveforms")):
         if topic not in s or len(s[topic]) == 0:
