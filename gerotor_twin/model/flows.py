@@ -35,7 +35,7 @@ from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import port_orifice_flow
 from ..hydraulics.state_equation import bulk_modulus_of, state_of
 from .contact import column, locate
-from .volumes import displace_volumes
+from .volumes import displace_chamber, volumes_moved
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY)
 
@@ -46,8 +46,13 @@ G_V, G_DV, G_AS, G_AD, G_KREL, G_VR = range(6)     # columns of Workspace.geo
 
 
 @njit(inline="always")
-def chamber_geometry(theta, tab, n, geo):
-    """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``."""
+def chamber_geometry(theta, tab, n, geo, disp, acc):
+    """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``.
+
+    V and dV/dθ are those of the outer gear displaced by ``disp`` (:mod:`.volumes`), whose
+    squeeze flow goes into ``acc`` (which must be initialised: :func:`volume_states`).
+    """
+    moved = volumes_moved(disp)
     for j in range(n):
         i0, i1, f = locate(tab, theta + j * tab.shift)
         geo[j, G_V] = column(tab, V, i0, i1, f)
@@ -56,6 +61,8 @@ def chamber_geometry(theta, tab, n, geo):
         geo[j, G_AD] = column(tab, AD, i0, i1, f)
         geo[j, G_KREL] = column(tab, KREL, i0, i1, f)
         geo[j, G_VR] = column(tab, VR, i0, i1, f)
+        if moved:                                   # micro_motion.chamber_volumes: displaced
+            displace_chamber(tab, i0, i1, f, j, disp, geo, acc, G_V, G_DV)
 
 
 @njit(inline="always")
@@ -211,9 +218,8 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     km, op, ws : KernelModel, Operating, Workspace
     """
     n = km.pc.n
-    chamber_geometry(theta, km.tab, n, ws.geo)
     volume_states(y, km, op, ws)
-    displace_volumes(theta, km.tab, n, ws.disp, ws.geo, ws.acc, G_V, G_DV)   # micro_motion.chamber_volumes
+    chamber_geometry(theta, km.tab, n, ws.geo, ws.disp, ws.acc)
     for i in range(ws.flows.shape[0]):
         ws.flows[i] = 0.0
     if want_jac:

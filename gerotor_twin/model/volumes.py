@@ -28,26 +28,28 @@ from .._jit import njit
 from ..geometry.tables import DFX, DFY, FX, FY
 from .contact import column, locate
 
-__all__ = ["displace_volumes", "move_volumes"]
+__all__ = ["volumes_moved", "displace_chamber", "move_volumes"]
 
 
 @njit(inline="always")
-def displace_volumes(theta, tab, n, disp, geo, acc, c_v, c_dv):
-    """Displacement terms of V (column ``c_v`` of ``geo``), dV/dθ (``c_dv``) and the squeeze flow (``acc``).
+def volumes_moved(disp):
+    """True when the gear is off centre or moved in the last step (``disp`` as in :func:`displace_chamber`)."""
+    return disp[0] != 0.0 or disp[1] != 0.0 or disp[2] != 0.0 or disp[3] != 0.0
 
-    ``disp`` (4,): displacement (ex, ey) [m] and the velocity of its last move (vx, vy) [m/s]
-    (all zero with nominal volumes: nothing changes).
+
+@njit(inline="always")
+def displace_chamber(tab, i0, i1, f, j, disp, geo, acc, c_v, c_dv):
+    """Displacement terms of chamber j's V (column ``c_v`` of ``geo``), dV/dθ (``c_dv``) and squeeze flow (``acc``).
+
+    ``i0, i1, f``: the chamber's table rows and weight (:func:`~.contact.locate`, shared with the
+    nominal geometry); ``disp`` (4,): displacement (ex, ey) [m] and the velocity of its last move
+    (vx, vy) [m/s] (all zero with nominal volumes: see :func:`volumes_moved`).
     """
-    ex, ey, vx, vy = disp[0], disp[1], disp[2], disp[3]
-    if ex == 0.0 and ey == 0.0 and vx == 0.0 and vy == 0.0:
-        return
-    for j in range(n):
-        i0, i1, f = locate(tab, theta + j * tab.shift)
-        fx = column(tab, FX, i0, i1, f)
-        fy = column(tab, FY, i0, i1, f)
-        geo[j, c_v] += fx * ex + fy * ey
-        geo[j, c_dv] += column(tab, DFX, i0, i1, f) * ex + column(tab, DFY, i0, i1, f) * ey
-        acc[j] -= fx * vx + fy * vy                 # squeeze by the gear's last move [m³/s]
+    fx = column(tab, FX, i0, i1, f)
+    fy = column(tab, FY, i0, i1, f)
+    geo[j, c_v] += fx * disp[0] + fy * disp[1]
+    geo[j, c_dv] += column(tab, DFX, i0, i1, f) * disp[0] + column(tab, DFY, i0, i1, f) * disp[1]
+    acc[j] -= fx * disp[2] + fy * disp[3]                 # squeeze by the gear's last move [m³/s]
 
 
 @njit(inline="always")
