@@ -156,7 +156,7 @@ def fluid_with_oil(fluid_sec: dict, fluid_kwargs: dict, oil: OilProperties | Non
 
 
 def fluid_at(fluid: Fluid, oil: OilProperties | None, t_ref_k: float, t_k: float) -> Fluid:
-    """``fluid`` (the properties at T_ref) carried to oil temperature T [K] by the oil's laws.
+    r"""``fluid`` (the properties at T_ref) carried to oil temperature T [K] by the oil's laws.
 
     .. math::
         \mu(T) = \mu_{ref}\,\frac{\mu_{oil}(T)}{\mu_{oil}(T_{ref})},\quad
