@@ -9,7 +9,7 @@ import numpy as np
 from gerotor_twin.errors import InputError, one_line
 
 from . import figures as F
-from .analysis import compare, find_plateaus, make_grid
+from .analysis import add_temperatures, compare, find_plateaus, make_grid, plateau_temperatures
 from .data import load_bench, load_twin, overlap, pump_config
 from .html import figure, render
 
@@ -73,7 +73,8 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
     cfg = pump_config(twins[0])
     plateaus = find_plateaus(grid, p_atm=cfg.fluid.atmospheric_pa)
     disp = cfg.gears.displacement_closed_form()
-    comps = [compare(grid, plateaus, tw, disp) for tw in twins]
+    temps = plateau_temperatures(bench, grid, plateaus)
+    comps = [add_temperatures(compare(grid, plateaus, tw, disp), temps) for tw in twins]
     chosen = F.choose_plateaus(plateaus)
 
     notes = [w for w in bench.warnings] + [w for tw in twins for w in tw.warnings]
@@ -95,7 +96,8 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
         figure(F.fig_flow(grid, plateaus, comps), "fig-flow",
                "Mean delivery flow, measured (flow meter) vs predicted (twin revolution means), and residual."),
         figure(F.fig_efficiency_map(comps) if plateaus else None, "fig-eta-map",
-               "Volumetric efficiency per plateau [%]: measured and predicted.", "no plateaus"),
+               "Volumetric efficiency per plateau [%]: measured and predicted, with the plateau's mean oil "
+               "temperature (the twin's properties follow it).", "no plateaus"),
         figure(F.fig_waveforms(twins, chosen), "fig-waveform",
                "Predicted chamber-1 pressure over one revolution at chosen plateaus.",
                "no plateaus" if not chosen else f"{why} /twin/chamber_waveform"),

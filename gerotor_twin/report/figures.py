@@ -57,8 +57,10 @@ def choose_plateaus(plateaus: list[Plateau], k: int = 3) -> list[Plateau]:
 
 
 def fig_operating(bench: BenchData, grid: Grid, plateaus: list[Plateau]) -> bytes:
-    """Shaft speed and delivery pressure over time, plateaus shaded and numbered."""
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 4.6), sharex=True)
+    """Shaft speed, delivery pressure (and oil temperature if recorded) over time, plateaus shaded and numbered."""
+    rows = 3 if bench.temperature is not None else 2
+    fig, axes = plt.subplots(rows, 1, figsize=(10, 2.3 * rows), sharex=True)
+    a1, a2 = axes[0], axes[1]
     t, w = bench.speed
     a1.plot(t, rad_s_to_rpm(w), lw=0.6, color="tab:blue", label="bench (raw)")
     a1.plot(grid.t, rad_s_to_rpm(grid.omega), lw=1.2, color="k", label=f"{grid.t[1] - grid.t[0]:g} s mean")
@@ -68,11 +70,22 @@ def fig_operating(bench: BenchData, grid: Grid, plateaus: list[Plateau]) -> byte
     a2.plot(t, pa_abs_to_bar_gauge(p, P_ATM), lw=0.4, color="tab:orange", label="bench (raw)")
     a2.plot(grid.t, pa_abs_to_bar_gauge(grid.p_delivery, P_ATM), lw=1.2, color="k", label="grid mean")
     a2.set_ylabel("delivery p [bar g]")
-    a2.set_xlabel("time [s]")
+    if rows == 3:
+        _temperature_axis(axes[2], bench, plateaus)
+    axes[-1].set_xlabel("time [s]")
     _shade(a1, plateaus, labels=True)
     _shade(a2, plateaus)
     fig.tight_layout()
     return _png(fig)
+
+
+def _temperature_axis(ax, bench: BenchData, plateaus: list[Plateau]) -> None:
+    """Bench oil temperature [°C] (the twin runs at it; see docs/fluid.md)."""
+    t, temp = bench.temperature
+    ax.plot(t, temp, lw=0.8, color="tab:red", label="bench oil temperature")
+    ax.set_ylabel("oil [°C]")
+    ax.legend(loc="lower right", fontsize=8)
+    _shade(ax, plateaus)
 
 
 def fig_flow(grid: Grid, plateaus: list[Plateau], comps: list[dict]) -> bytes:
@@ -109,8 +122,10 @@ def fig_efficiency_map(comps: list[dict]) -> bytes:
         y = [r["bar"] for r in rows]
         z = [np.nan if v is None else v * 100 for v in vs]
         sc = ax.scatter(x, y, c=z, s=260, cmap="viridis", vmin=vmin, vmax=vmax, edgecolor="k")
-        for xi, yi, zi in zip(x, y, z):
-            ax.annotate(f"{zi:.1f}", (xi, yi), textcoords="offset points", xytext=(0, 11), ha="center",
+        temps = [r.get("oil_temperature_c") for r in rows]
+        for xi, yi, zi, tc in zip(x, y, z, temps):
+            label = f"{zi:.1f}" if tc is None else f"{zi:.1f}\n{tc:.0f} °C"
+            ax.annotate(label, (xi, yi), textcoords="offset points", xytext=(0, 11), ha="center",
                         fontsize=7)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("speed [rpm]")

@@ -42,7 +42,7 @@ def _stats_cells(s: dict, scale: float, fmt: str) -> str:
 
 
 def plateau_table(comp: dict) -> str:
-    head = ("<tr><th>#</th><th>t [s]</th><th>speed [rpm]</th><th>p [bar g]</th>"
+    head = ("<tr><th>#</th><th>t [s]</th><th>speed [rpm]</th><th>p [bar g]</th><th>oil [°C]</th>"
             "<th>flow meas [L/min]</th><th>flow pred [L/min]</th>"
             "<th>bias [L/min]</th><th>RMSE [L/min]</th><th>max |err| [L/min]</th>"
             "<th>η<sub>v</sub> meas [%]</th><th>η<sub>v</sub> pred [%]</th><th>Δη<sub>v</sub> [%-pt]</th></tr>")
@@ -50,16 +50,17 @@ def plateau_table(comp: dict) -> str:
     for r in comp["plateaus"]:
         d = None if r["eta_predicted"] is None or r["eta_measured"] is None else r["eta_predicted"] - r["eta_measured"]
         rows.append(f"<tr><td>{r['plateau']}</td><td>{r['t0_s']:.1f}–{r['t1_s']:.1f}</td><td>{r['rpm']:.0f}</td>"
-                    f"<td>{r['bar']:.2f}</td><td>{_f(r['flow_measured_m3s'], LPM)}</td>"
+                    f"<td>{r['bar']:.2f}</td><td>{_f(r.get('oil_temperature_c'), 1, '{:.1f}')}</td>"
+                    f"<td>{_f(r['flow_measured_m3s'], LPM)}</td>"
                     f"<td>{_f(r['flow_predicted_m3s'], LPM)}</td>"
                     + _stats_cells(r["flow_error_m3s"], LPM, "{:.3f}")
                     + f"<td>{_f(r['eta_measured'], 100, '{:.2f}')}</td><td>{_f(r['eta_predicted'], 100, '{:.2f}')}</td>"
                     f"<td>{_f(d, 100, '{:+.2f}')}</td></tr>")
     o, w = comp["overall"], comp["whole_run"]
-    rows.append(f"<tr><th class='l' colspan='6'>all plateau samples</th>"
+    rows.append(f"<tr><th class='l' colspan='7'>all plateau samples</th>"
                 + _stats_cells(o["flow_error_m3s"], LPM, "{:.3f}")
                 + f"<td colspan='2'>η<sub>v</sub> RMSE [%-pt]</td><td>{_f(o['eta_error']['rmse'], 100, '{:.2f}')}</td></tr>")
-    rows.append(f"<tr><th class='l' colspan='6'>whole run (transients included)</th>"
+    rows.append(f"<tr><th class='l' colspan='7'>whole run (transients included)</th>"
                 + _stats_cells(w["flow_error_m3s"], LPM, "{:.3f}") + "<td colspan='3'></td></tr>")
     return f"<table class='metrics'>{head}{''.join(rows)}</table>"
 
