@@ -75,3 +75,17 @@ def test_bad_temperature_input(model):
         with pytest.raises(InputError) as ei:
             model.check_inputs(Inputs(W, PS, PD, bad))
         assert ei.value.field == "oil_temperature"
+
+
+def test_paper_state_equation_is_rescaled_not_rebuilt(cfg):
+    """Closed form: eq. (23)'s s(p) ∝ 1/β*, so the rescaled table at 77 °C inverts like a freshly built one
+    (within the table's stated 2e-4 Pa) and s(p) agrees exactly."""
+    from gerotor_twin.hydraulics.state_equation import log_density_of
+    from gerotor_twin.model.params import kernel_model
+    c = cfg.with_fluid_model("paper")
+    m = PumpModel(c, "fixed")
+    m.set_temperature(350.0)
+    fresh = kernel_model(c, m.tables, m.lateral, temperature_k=350.0).eos
+    for p in (3e3, 5e4, 99e3, 101e3, 103e3, 2e6):
+        assert log_density_of(p, m.kernel.eos) == pytest.approx(log_density_of(p, fresh), rel=1e-12, abs=1e-300)
+        assert abs(pressure_of(log_density_of(p, fresh), m.kernel.eos) - p) <= 2e-4

@@ -26,7 +26,7 @@ from ..config import PumpConfig
 from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
-from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation
+from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation, with_liquid_modulus
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
@@ -174,7 +174,7 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
     g_lat, g_sd, g_dr = _conductances(config, lateral, f.viscosity_pa_s)
     pc = km.pc._replace(density=f.density_kg_m3, viscosity=f.viscosity_pa_s, g_lateral=g_lat,
                         g_suction_delivery=g_sd, g_drain=g_dr)
-    return KernelModel(tab=km.tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
+    return KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air))
 
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:
