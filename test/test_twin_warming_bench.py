@@ -44,6 +44,7 @@ def runs(tmp_path_factory):
         grid = make_grid(bench, overlap(bench, [twin]))
         q_pred = compare(grid, [], twin, 22.78e-6)["q_pred"]
         res[name] = (grid.t, q_pred - grid.q_meas, grid.q_meas)
+    res["paths"] = (bag, out["coupled"], tmp)
     return res, truth
 
 
@@ -56,11 +57,11 @@ def test_temperature_coupled_twin_does_not_drift_while_the_constant_one_does(run
     """Behaviour: relative flow residual (twin − measured)/measured, mean over 1.5–3 s (oil ≈ 38 °C) and
     over 5.5–7 s (oil ≈ 56 °C).  Coupled: both within 1.5 % and the change under 1 pt; constant-T: the
     residual grows by more than 5 pt (the hot oil leaks ~2× more than the 40 °C twin predicts).
-    Measured 2026-11-30: coupled +0.26 % → +0.06 % (drift −0.19 pt), constant +2.60 % → +11.13 %
+    Measured 2026-11-30: coupled +0.24 % → +0.06 % (drift −0.18 pt), constant +2.58 % → +11.11 %
     (drift +8.53 pt); the figures of the run are printed (pytest -s)."""
     res, _truth = runs
     drift = {}
-    for name, (t, err, q) in res.items():
+    for name, (t, err, q) in ((k, v) for k, v in res.items() if k != "paths"):
         early, late = _window(t, err, q, 1.5, 3.0), _window(t, err, q, 5.5, 7.0)
         drift[name] = (early, late)
         print(f"{name}: residual {100 * early:+.2f} % early, {100 * late:+.2f} % late, "
@@ -68,3 +69,15 @@ def test_temperature_coupled_twin_does_not_drift_while_the_constant_one_does(run
     (ce, cl), (ke, kl) = drift["coupled"], drift["constant"]
     assert abs(ce) < 0.015 and abs(cl) < 0.015 and abs(cl - ce) < 0.01
     assert kl - ke > 0.05
+
+
+def test_report_shows_the_oil_temperature(runs):
+    """Behaviour: the report of the warming bench has the oil-temperature panel and the plateau's mean oil
+    temperature in its table and JSON (between the start and the asymptote of the warm-up)."""
+    from gerotor_twin.report.build import build_report
+    bag, twin, tmp = runs[0]["paths"]
+    res = build_report(bag, [twin], tmp / "r.html", json_path=tmp / "r.json")
+    rows = res["twins"][0]["plateaus"]
+    assert rows and all(30.0 < r["oil_temperature_c"] < 60.0 for r in rows)
+    html = (tmp / "r.html").read_text()
+    assert "oil [°C]" in html and "oil temperature" in html
