@@ -111,19 +111,42 @@ def parse_oil(sec: dict) -> tuple[OilProperties, float]:
         t = check_range("oil.bulk_modulus_temperature_c", _number(sec, "bulk_modulus_temperature_c"),
                         *_T_RANGE_C, unit="°C")
         kw["bulk_modulus_temperature_k"] = celsius_to_kelvin(t)
-    if "grade" in sec:
-        g = sec["grade"]
-        if isinstance(g, bool) or g not in ISO_VG_PRESETS:
-            raise InputError("oil.grade", g, " | ".join(str(k) for k in ISO_VG_PRESETS))
-        oil = OilProperties.iso_vg(int(g), **kw)
-    else:
-        (ta, nua), (tb, nub) = _viscosity_points(sec)
-        kw.setdefault("name", "oil of config")
-        oil = OilProperties.from_viscosity_points(nua, ta, nub, tb, **kw)
+    try:
+        oil = _oil(sec, kw)
+    except InputError as exc:          # name the YAML key, not the OilProperties field
+        raise _yaml_error(exc) from None
     t_ref = check_range("oil.reference_temperature_c",
                         _number(sec, "reference_temperature_c", kelvin_to_celsius(DEFAULT_REFERENCE_TEMPERATURE_K)),
                         *_T_RANGE_C, unit="°C")
     return oil, celsius_to_kelvin(t_ref)
+
+
+def _oil(sec: dict, kw: dict) -> OilProperties:
+    if "grade" in sec:
+        g = sec["grade"]
+        if isinstance(g, bool) or g not in ISO_VG_PRESETS:
+            raise InputError("oil.grade", g, " | ".join(str(k) for k in ISO_VG_PRESETS))
+        return OilProperties.iso_vg(int(g), **kw)
+    (ta, nua), (tb, nub) = _viscosity_points(sec)
+    kw.setdefault("name", "oil of config")
+    return OilProperties.from_viscosity_points(nua, ta, nub, tb, **kw)
+
+
+#: OilProperties field → (YAML key, factor from SI to the YAML unit, YAML unit)
+_YAML_KEYS = {"oil.bulk_modulus_ref_pa": ("oil.bulk_modulus_pa", 1.0, "Pa"),
+              "oil.kinematic_viscosity_a_m2_s": ("oil.viscosity_points[0].viscosity", 1e6, "mm²/s"),
+              "oil.kinematic_viscosity_b_m2_s": ("oil.viscosity_points[1].viscosity", 1e6, "mm²/s"),
+              "oil.viscosity_temperature_b_k": ("oil.viscosity_points[1].temperature", 1.0, "K")}
+
+
+def _yaml_error(exc: InputError) -> InputError:
+    """``exc`` with the YAML key of the field and its value in the YAML unit."""
+    if exc.field not in _YAML_KEYS:
+        return exc
+    key, f, unit = _YAML_KEYS[exc.field]
+    value = exc.value * f if isinstance(exc.value, (int, float)) else exc.value
+    allowed = exc.allowed if f == 1.0 else f"{exc.allowed} (in m²/s; the key is in {unit})"
+    return InputError(key, value, allowed, exc.reason)
 
 
 def parse_air(sec: dict) -> AirContent:
