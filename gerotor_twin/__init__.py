@@ -7,13 +7,15 @@ MCAP logging, bag replay and model-vs-bench reports.
 =======================  ==================================================
 module                   responsibility
 =======================  ==================================================
-``config``               typed, validated pump / fluid / operating config (YAML)
+``config``               typed, validated pump / fluid / operating config (YAML);
+                         ``config_oil``: its ``oil``, ``mixture``, ``fluid_model``
 ``errors``               :class:`InputError`: field, value, allowed range
 ``units``                rpm/bar/L-min conversions, used only at the edges
 ``geometry``             gerotor profiles, chambers (V, dV/dθ, l_x, l_y, arms),
                          ports, tooth-tip gaps (h, le, v_r), lateral gaps,
                          tables over the shaft angle
-``hydraulics``           fluid (β(p) Eq. (23)), state equation ln ρ ⇄ p,
+``hydraulics``           oil vs temperature, fluid (β(p) Eq. (23)), oil–air–vapour
+                         mixture, state equation ln ρ ⇄ p (both models),
                          orifice (Eq. (21), Cd(λ)), leakages (sec. 3.1–3.4)
 ``bearing``              outer gear as a journal bearing: mobility, short
                          bearing (Method 1), FDM Reynolds, fixed centre;

@@ -20,7 +20,7 @@ from pathlib import Path
 from .bearing.registry import MODEL_NAMES
 from .errors import InputError, clip, one_line
 from .io.reader import McapReadError
-from .units import m3s_to_lpm, pa_abs_to_bar_gauge
+from .units import celsius_to_kelvin, kelvin_to_celsius, m3s_to_lpm, pa_abs_to_bar_gauge
 
 __all__ = ["main", "build_parser"]
 
@@ -79,15 +79,19 @@ def cmd_simulate(args) -> int:
     from .model.steady import run_steady
 
     cfg = load_config(args.config)
+    if args.fluid_model:
+        cfg = cfg.with_fluid_model(args.fluid_model)
     model = PumpModel(cfg, bearing=args.model)
     t0 = time.perf_counter()
     res = run_steady(model, args.rpm, args.bar, max_revolutions=args.revolutions,
-                     progress=_progress(f"{args.rpm:g} rpm {args.bar:g} bar"))
+                     progress=_progress(f"{args.rpm:g} rpm {args.bar:g} bar"), **_oil_temp(args))
     print(file=sys.stderr)
     s = res.summary()
     s["wall_time_s"] = time.perf_counter() - t0
     print(f"{args.model} model, {args.rpm:g} rpm, {args.bar:g} bar gauge "
           f"({s['revolutions']} revolutions to periodic state, {s['wall_time_s']:.2f} s)")
+    print(f"  oil                     {kelvin_to_celsius(model.temperature_k):9.1f} °C, "
+          f"μ {1e3 * model.kernel.pc.viscosity:.2f} mPa·s, fluid model {cfg.fluid_model}")
     print(f"  theoretical flow        {m3s_to_lpm(s['theoretical_flow_m3s']):9.3f} L/min")
     print(f"  mean delivery flow      {m3s_to_lpm(s['mean_delivery_flow_m3s']):9.3f} L/min")
     print(f"  volumetric efficiency   {100 * s['volumetric_efficiency']:9.2f} %")
@@ -111,6 +115,17 @@ def cmd_simulate(args) -> int:
         plot_steady(res, args.plot)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _oil_temp(args) -> dict:
+    """``run_steady`` keyword for ``--oil-temp`` [°C → K] (none if not given)."""
+    if args.oil_temp is None:
+        return {}
+    from .model.records import check_oil_temperature
+    try:
+        return {"oil_temperature": check_oil_temperature(celsius_to_kelvin(args.oil_temp))}
+    except InputError:
+        raise InputError("--oil-temp", args.oil_temp, "[-40, 200] °C") from None
 
 
 # --------------------------------------------------------------------- demo
@@ -221,6 +236,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     s.add_argument("--json", help="write the results to this JSON file")
     s.add_argument("--plot", help="write chamber-1 pressure and delivery flow vs angle (PNG)")
+    s.add_argument("--oil-temp", type=float, help="oil temperature [°C] (default: the config's reference "
+                   "temperature; no effect without an oil section)")
+    s.add_argument("--fluid-model", choices=("mixture", "paper"), help="override the config's fluid_model")
     s.set_defaults(func=cmd_simulate)
 
     d = sub.add_parser("demo", help="the main job of `make demo`")

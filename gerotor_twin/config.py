@@ -7,14 +7,18 @@ naming the dotted field, the value and the allowed range.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 from .errors import InputError, check_range
 from .geometry.gerotor import GerotorGeometry
 from .geometry.ports import Port
+from .config_oil import (DEFAULT_REFERENCE_TEMPERATURE_K, OIL_SET_FLUID_KEYS, fluid_at, fluid_with_oil,
+                         oil_to_dict, parse_air, parse_fluid_model, parse_oil)
 from .hydraulics.fluid import Fluid
+from .hydraulics.mixture import AirContent
+from .hydraulics.oil import OilProperties
 
 __all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances", "MicroMotion",
            "load_config", "default_config_path", "parse_config"]
@@ -177,6 +181,23 @@ class PumpConfig:
     numerics: Numerics
     source: str = "<memory>"
     micro_motion: MicroMotion = MicroMotion()
+    #: oil properties versus temperature (None: μ, ρ, β of ``fluid`` are constants)
+    oil: OilProperties | None = None
+    #: oil temperature used while none is measured [K]; ``fluid`` holds the properties there
+    reference_temperature_k: float = 313.15
+    #: state equation of the oil: "mixture" (oil + free air + vapour) or "paper" (eq. (23))
+    fluid_model: str = "mixture"
+    #: free air content and polytropic index of the mixture
+    air: AirContent = AirContent()
+
+    def with_fluid_model(self, model: str) -> "PumpConfig":
+        """The same pump with another fluid model (``"paper"`` or ``"mixture"``)."""
+        return replace(self, fluid_model=parse_fluid_model(model))
+
+    def fluid_at(self, t_k: float | None) -> Fluid:
+        """The fluid at oil temperature T [K] (the reference temperature for None; constant without oil)."""
+        t_ref = self.reference_temperature_k
+        return fluid_at(self.fluid, self.oil, t_ref, t_ref if t_k is None else t_k)
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -191,7 +212,8 @@ class PumpConfig:
                                   "end_deg": math.degrees(self.suction_port.end)},
                       "delivery": {"start_deg": math.degrees(self.delivery_port.start),
                                    "end_deg": math.degrees(self.delivery_port.end)}},
-            "fluid": _asdict(self.fluid),
+            "fluid": _fluid_dict(self),
+            **_oil_dict(self),
             "orifice": _asdict(self.orifice),
             "leakage": {"tip_dh": self.tip_dh},
             "boundary": _asdict(self.boundary),
@@ -205,8 +227,22 @@ def _asdict(obj) -> dict:
     return {f.name: getattr(obj, f.name) for f in fields(obj)}
 
 
+def _fluid_dict(cfg: PumpConfig) -> dict:
+    """The ``fluid`` section (without the keys an ``oil`` section sets)."""
+    d = _asdict(cfg.fluid)
+    return d if cfg.oil is None else {k: v for k, v in d.items() if k not in OIL_SET_FLUID_KEYS}
+
+
+def _oil_dict(cfg: PumpConfig) -> dict:
+    """``fluid_model``, ``mixture`` and (if any) ``oil`` sections."""
+    out = {"fluid_model": cfg.fluid_model, "mixture": _asdict(cfg.air)}
+    if cfg.oil is not None:
+        out["oil"] = oil_to_dict(cfg.oil, cfg.reference_temperature_k)
+    return out
+
+
 _SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
-             "micro_motion"}
+             "micro_motion", "oil", "mixture", "fluid_model"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -278,8 +314,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
         a1 = _num(p, f"ports.{name}", "end_deg")
         check_range(f"ports.{name}.start_deg", a0, 0.0, 360.0, hi_open=True, unit="deg")
         ports[name] = Port(name, math.radians(a0), math.radians(a1))
-    fk = {f.name for f in fields(Fluid)}
-    fluid = Fluid(**{k: _num(_section(raw, "fluid", fk), "fluid", k) for k in _section(raw, "fluid", fk)})
+    fluid, oil, t_ref = _fluid_and_oil(raw)
     ok = {"cd_max", "lambda_crit", "law", "laminar_delta"}
     osec = _section(raw, "orifice", ok, False)
     orifice = Orifice(**{k: (str(osec[k]) if k == "law" else _num(osec, "orifice", k)) for k in osec})
@@ -298,7 +333,9 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     _check_ports(ports["suction"], ports["delivery"])
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,
-                      boundary=boundary, range=rng, numerics=num, source=source,
+                      boundary=boundary, range=rng, numerics=num, source=source, oil=oil,
+                      reference_temperature_k=t_ref, fluid_model=parse_fluid_model(raw.get("fluid_model", "mixture")),
+                      air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
                       micro_motion=_micro_motion(raw))
 
 
@@ -306,6 +343,15 @@ def _micro_motion(raw: dict) -> MicroMotion:
     """The optional ``micro_motion`` section (two choices, each a string)."""
     sec = _section(raw, "micro_motion", {f.name for f in fields(MicroMotion)}, False)
     return MicroMotion(**{k: v if isinstance(v, str) else repr(v) for k, v in sec.items()})
+
+
+def _fluid_and_oil(raw: dict) -> tuple[Fluid, OilProperties | None, float]:
+    """The ``fluid`` and optional ``oil`` sections: (fluid at the reference temperature, oil, T_ref [K])."""
+    fk = {f.name for f in fields(Fluid)}
+    fs = _section(raw, "fluid", fk)
+    kwargs = {k: _num(fs, "fluid", k) for k in fs}
+    oil, t_ref = (None, DEFAULT_REFERENCE_TEMPERATURE_K) if raw.get("oil") is None else parse_oil(raw["oil"])
+    return fluid_with_oil(fs, kwargs, oil, t_ref), oil, t_ref
 
 
 def _check_ports(s: Port, d: Port) -> None:

@@ -27,6 +27,23 @@ def raw():
     (lambda r: r["boundary"].update(mode="magic"), "boundary.mode"),
     (lambda r: r["ports"]["delivery"].update(end_deg=200.0), "ports.delivery.start_deg"),
     (lambda r: r["gears"].pop("width_m"), "gears.width_m"),
+    # the oil, mixture and fluid-model sections (issue 13; test_config_oil.py has the rest)
+    (lambda r: r["oil"].update(grade=46), "oil.grade"),                                  # both forms
+    (lambda r: r["oil"].pop("viscosity_points"), "oil.grade"),                           # neither
+    (lambda r: r["oil"].update(colour="amber"), "oil.colour"),
+    (lambda r: r["oil"].update(viscosity_points=[[40, 46]]), "oil.viscosity_points"),
+    (lambda r: r["oil"].update(viscosity_points=[[40, 46], [100, float("nan")]]),
+     "oil.viscosity_points[1].viscosity"),
+    (lambda r: r["oil"].update(viscosity_points=[[40, 46], [100, 60]]), "oil.viscosity_points[1].viscosity"),
+    (lambda r: r["oil"].update(viscosity_points=[[40, 46], [900, 6]]), "oil.viscosity_points[1].temperature"),
+    (lambda r: r["oil"].update(reference_temperature_c=500.0), "oil.reference_temperature_c"),
+    (lambda r: r["oil"].update(bulk_modulus_pa=-1.0), "oil.bulk_modulus_pa"),
+    (lambda r: r["oil"].update(density_15_kg_m3="heavy"), "oil.density_15_kg_m3"),
+    (lambda r: r["fluid"].update(viscosity_pa_s=0.04), "fluid.viscosity_pa_s"),           # set by the oil
+    (lambda r: r.update(fluid_model="ideal"), "fluid_model"),
+    (lambda r: r["mixture"].update(air_fraction=0.9), "mixture.air_fraction"),
+    (lambda r: r["mixture"].update(polytropic_index=2.0), "mixture.polytropic_index"),
+    (lambda r: r["mixture"].update(bubbles=3), "mixture.bubbles"),
 ])
 def test_bad_config_names_field(mutate, field):
     r = raw()

@@ -86,18 +86,43 @@ def test_kinematic_viscosity_returns_data_points(grade):
     assert abs(lo / (z - 0.7) - 1.0) > 1e-7      # the term is not negligible there
 
 
-@pytest.mark.parametrize("grade, nu0_published", [(32, 338.0), (46, 580.0), (68, 1040.0)])
-def test_kinematic_viscosity_third_point_data_sheet(grade, nu0_published):
-    """LITERATURE: ν at 0 °C from the 40/100 °C fit vs the Shell Tellus S2 M data sheet.
+#: G. W. Stachowiak, A. W. Batchelor, *Engineering Tribology*, Table 2.3 "Dynamic viscosity and
+#: pressure-viscosity coefficients of some commonly used lubricants" (adapted from their ref. [12]):
+#: dynamic viscosity at atmospheric pressure [mPa·s] at 30 / 60 / 100 °C, mineral oils, in the
+#: book's order (the two rows of water and the EO-PO copolymer left out: not petroleum products).
+STACHOWIAK_T2_3 = (
+    ("light machine oil", 38.0, 12.1, 5.3), ("heavy machine oil", 153.0, 34.0, 9.1),
+    ("heavy machine oil", 250.0, 50.5, 12.6), ("cylinder oil", 810.0, 135.0, 26.8),
+    ("spindle oil", 18.6, 6.3, 2.4), ("light machine oil", 45.0, 12.0, 3.9),
+    ("medicinal white oil", 107.0, 23.3, 6.4), ("heavy machine oil", 122.0, 26.3, 7.3),
+    ("heavy machine oil", 171.0, 31.0, 7.5), ("spindle oil", 30.7, 8.6, 3.1),
+    ("heavy machine oil", 165.0, 30.0, 6.8), ("heavy machine oil", 310.0, 44.2, 9.4),
+    ("cylinder oil", 2000.0, 180.0, 24.0),
+)
 
-    Published typical values (Shell Tellus S2 M technical data sheet): ν(0 °C) =
-    338 / 580 / 1040 mm²/s for VG 32 / 46 / 68 with ν(40) = 32/46/68 and
-    ν(100) = 5.4/6.8/8.6 mm²/s.  Tolerance 3 %: 0 °C is a 40 K extrapolation
-    beyond the fitted interval, and the data sheet rounds ν100 to two digits
-    (±0.05 mm²/s on 5.4 moves the 0 °C prediction by ~1.5 %).
+
+def test_walther_third_point_published_table():
+    """LITERATURE: fit through 30 and 100 °C, predict 60 °C, against Stachowiak & Batchelor Table 2.3.
+
+    The table gives dynamic viscosity; ν = μ/ρ with a D1250 density from ρ15 = 880 kg/m³ (the
+    oils' densities are not given; ±30 kg/m³ moves the prediction by < 0.1 %, the density
+    nearly cancels).  Accuracy measured over the 13 mineral oils: median |error| 1.8 %,
+    12 of 13 within 5.5 %; the first "light machine oil" row is off by +12 % (its 60 °C value
+    is below what any single Walther line through its 30/100 °C values gives).  These are the
+    figures stated in docs/fluid.md; ASTM D341 itself gives no accuracy figure we could cite.
     """
-    oil = OilProperties.iso_vg(grade)
-    assert m2_s_to_cst(oil.kinematic_viscosity(K)) == pytest.approx(nu0_published, rel=0.03)
+    errors = []
+    for _name, mu30, mu60, mu100 in STACHOWIAK_T2_3:
+        ref = OilProperties(density_15_kg_m3=880.0)
+        nu = lambda mu, t_c: mu * 1e-3 / ref.density(t_c + K)             # noqa: E731 [m²/s]
+        oil = OilProperties.from_viscosity_points(m2_s_to_cst(nu(mu30, 30.0)), 30.0,
+                                                  m2_s_to_cst(nu(mu100, 100.0)), 100.0, density_15_kg_m3=880.0)
+        assert oil.viscosity(303.15) == pytest.approx(mu30 * 1e-3, rel=1e-12)   # the two points exactly
+        assert oil.viscosity(373.15) == pytest.approx(mu100 * 1e-3, rel=1e-12)
+        errors.append(oil.viscosity(333.15) / (mu60 * 1e-3) - 1.0)
+    errors = sorted(abs(e) for e in errors)
+    assert errors[len(errors) // 2] <= 0.02            # median (measured 1.77 %)
+    assert errors[-2] <= 0.055 and errors[-1] <= 0.13  # all but one within 5.5 %, the outlier 12.2 %
 
 
 def test_kinematic_viscosity_worked_example():

@@ -79,9 +79,18 @@ def test_jacobian_matches_finite_differences_in_the_liquid_and_at_port_edges(war
     assert edge_seen, "no angle with a port edge (open area < 5 % of its maximum) was checked"
 
 
-def test_jacobian_matches_finite_differences_inside_the_switch_band(warm):
+@pytest.fixture(scope="module")
+def warm_paper(cfg):
+    """As ``warm`` with the paper's fluid model (eq. (23))."""
+    m = PumpModel(cfg.with_fluid_model("paper"), "mobility")
+    inp = Inputs(3000 * math.pi / 30, P_ATM, P_ATM + 27.5e5)
+    s, _ = m.advance(m.initial_state(inp), 0.1, inp)
+    return m, inp, s
+
+
+def test_jacobian_matches_finite_differences_inside_the_switch_band(warm_paper):
     """Behaviour: suction chambers placed inside the β switch band (p_atm ± band/2) and on the floor."""
-    m, inp, s = warm
+    m, inp, s = warm_paper
     eos = m.kernel.eos
     op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
     y = s.log_density.copy()
@@ -105,10 +114,45 @@ def test_jacobian_in_restriction_mode(cfg):
     _check_jacobian(m, op, s.log_density, s.theta, m.gaps(s.theta, s.eccentricity)[0])
 
 
+def test_jacobian_matches_finite_differences_in_the_mixture_at_low_pressure(warm):
+    """Behaviour: suction chambers of the mixture model in its table (0.3 bar) and below it (Newton, 5 kPa)."""
+    m, inp, s = warm
+    eos = m.kernel.eos
+    assert eos.kind == 1          # the default fluid model is the mixture
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    y = s.log_density.copy()
+    theta = s.theta
+    suction = [j for j in range(m.N) if m.tables.column("AS", theta, j) > 0]
+    for target in (0.3e5, 5e3):
+        for j in suction:
+            y[j] = log_density_of(target, eos)
+        _check_jacobian(m, op, y, theta, m.gaps(theta, s.eccentricity)[0])
+
+
+def test_pressure_of_inverts_the_mixture(cfg):
+    """Closed form: p(s) of the kernel (Hermite table / Newton) against the closed-form s(p) of the mixture,
+    and β of state_of against the closed-form β(p)."""
+    from gerotor_twin.hydraulics.mixture import mixture_bulk_modulus, mixture_log_density
+    from gerotor_twin.hydraulics.state_equation import state_of
+    eos = PumpModel(cfg, "fixed").kernel.eos
+    args = (eos.beta_liquid, eos.air_fraction, eos.polytropic_index, eos.p_vap, eos.p_atm)
+    rng = np.random.default_rng(3)
+    pressures = np.concatenate([eos.p_vap + np.geomspace(1e-3, 8e3, 50),      # below the table: Newton
+                                rng.uniform(1e4, 3e5, 200),                     # around atmospheric
+                                rng.uniform(3e5, 4e6, 100), [6e7, 2e8]])        # delivery, above the table
+    for p in pressures:
+        s = mixture_log_density(p, *args)
+        assert abs(pressure_of(s, eos) - p) <= 0.02, p       # stated table error: ≤ 0.011 Pa measured
+        pk, bk = state_of(s, eos)
+        assert bk == pytest.approx(mixture_bulk_modulus(pk, *args)[0], rel=3e-6), p   # ≤ 2.1e-6 measured
+        assert log_density_of(p, eos) == s
+    assert pressure_of(-1e3, eos) >= eos.p_vap
+
+
 def test_pressure_of_inverts_the_exact_state_equation(cfg):
     """Closed form: p(s) of the kernel against bisection on the exact s(p) (quadrature), all regions."""
     from gerotor_twin.model.params import kernel_model
-    m = PumpModel(cfg, "fixed")
+    m = PumpModel(cfg.with_fluid_model("paper"), "fixed")
     eos = m.kernel.eos
     f = cfg.fluid
     args = (f.bulk_modulus_pa, f.cavitation_ratio, f.atmospheric_pa, f.switch_band_pa, f.vapour_pressure_pa)

@@ -47,7 +47,8 @@ def cmd_synth_bench(args) -> int:
           f"seed {spec.seed})")
     for row in res["truth"]:
         print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar: mean flow "
-              f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}")
+              f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}, "
+              f"oil {row['oil_temperature_c']:.1f} °C")
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=2))
         print(f"wrote {args.json}")

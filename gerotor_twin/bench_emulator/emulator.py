@@ -34,10 +34,10 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.io import McapLog
 from gerotor_twin.io import messages as m
 from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
-from gerotor_twin.units import rpm_to_rad_s
+from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
 from .profiles import Profile
-from .sensors import BenchSpec, Encoder, FirstOrderLag, noise_streams
+from .sensors import BenchSpec, Encoder, FirstOrderLag, noise_streams, oil_warmup
 
 __all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "synthesize"]
 
@@ -136,7 +136,11 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         return p_atm - spec.suction_drop_pa * (w / w_max) ** 2
 
     # ---- run-in at the first set-point (not recorded)
-    inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]))
+    def oil_k(t: float) -> float:         # true oil temperature of the emulated pump [K]
+        return celsius_to_kelvin(oil_warmup(t, spec.temperature_start_c, spec.temperature_end_c,
+                                            spec.temperature_warmup_tau_s))
+
+    inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]), oil_k(0.0))
     state = model.initial_state(inp, t=-spec.warmup_s)
     state, out = model.advance(state, spec.warmup_s, inp)
     q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
@@ -161,6 +165,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
     true_q = np.empty(n_ticks)
     true_w = np.empty(n_ticks)
+    true_t = np.empty(n_ticks)
     t0_ns = spec.start_time_ns
 
     def emit(topic: str, msg: dict, t_ns: int) -> None:
@@ -172,16 +177,17 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
             w = max(0.0, motor(sp_w[k]))
             pd = p_atm + valve(sp_p[k])
             ps = suction(w)
-            state, out = model.advance(state, dt, Inputs(w, ps, pd))
+            t_oil = oil_k(k * dt)
+            state, out = model.advance(state, dt, Inputs(w, ps, pd, t_oil))
             q_inst = float(out.delivery_flow[-1])
             q_mean = float(np.mean(out.delivery_flow))
-            true_q[k], true_w[k] = q_mean, w
+            true_q[k], true_w[k], true_t[k] = q_mean, w, kelvin_to_celsius(t_oil)
             t = (k + 1) * dt
             t_ns = t0_ns + int(round(t * 1e9))
             p_meas = p_sensor(pd + spec.ripple_impedance * (q_inst - ripple_dc(q_mean)))
             s_meas = s_sensor(ps - 0.1 * spec.ripple_impedance * (q_inst - ripple_dc.y))
             q_meas = flow_meter(q_mean)
-            temp = thermo(spec.temperature_start_c + spec.temperature_rise_c * t / profile.duration_s)
+            temp = thermo(kelvin_to_celsius(t_oil))
             w_meas, angle = encoder(state.theta)
             i = k + 1
             if i % dec["speed"] == 0:
@@ -207,12 +213,12 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         log.close()
     show(profile.duration_s, done=True)
     return {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed,
-            "message_counts": counts, "truth": _truth(profile, cfg, model, true_q, true_w, dt)}
+            "message_counts": counts, "truth": _truth(profile, cfg, model, true_q, true_w, true_t, dt)}
 
 
-def _truth(profile: Profile, cfg: PumpConfig, model: PumpModel, q: np.ndarray, w: np.ndarray,
+def _truth(profile: Profile, cfg: PumpConfig, model: PumpModel, q: np.ndarray, w: np.ndarray, temp: np.ndarray,
            dt: float) -> list[dict]:
-    """Ground truth on the second half of each plateau: mean flows and efficiency."""
+    """Ground truth on the second half of each plateau: mean flows, efficiency and oil temperature [°C]."""
     rows = []
     for t0, t1, rpm, bar in profile.plateaus():
         a, b = int(round((t0 + t1) / 2 / dt)), int(round(t1 / dt))
@@ -221,7 +227,8 @@ def _truth(profile: Profile, cfg: PumpConfig, model: PumpModel, q: np.ndarray, w
         qm = float(q[a:b].mean())
         qth = float(model.displacement * w[a:b].mean() / (2 * math.pi))
         rows.append({"t0_s": t0, "t1_s": t1, "rpm": rpm, "bar": bar, "true_mean_flow_m3s": qm,
-                     "theoretical_flow_m3s": qth, "true_volumetric_efficiency": qm / qth if qth > 0 else None})
+                     "theoretical_flow_m3s": qth, "true_volumetric_efficiency": qm / qth if qth > 0 else None,
+                     "oil_temperature_c": float(temp[a:b].mean())})
     return rows
 
 

@@ -51,8 +51,11 @@ class BenchSpec:
         Flow-meter time constant [s].
     flow_noise_rel, flow_noise_m3s : float
         Flow-meter noise: relative to the reading [-] and absolute [m³/s] (standard deviations).
-    temperature_start_c, temperature_rise_c : float
-        Oil temperature at the start and its linear rise over the run [°C].
+    temperature_start_c, temperature_end_c, temperature_warmup_tau_s : float
+        Oil warm-up of the emulated bench: the true oil temperature (which the
+        emulated pump runs at) rises from the start value towards the end value
+        as T(t) = T_end − (T_end − T_start)·exp(−t/τ_warm) [°C, °C, s]
+        (:func:`oil_warmup`).
     temperature_tau_s, temperature_noise_c : float
         Thermometer time constant [s] and noise [K].
     latency_s, latency_jitter_s : float
@@ -83,8 +86,9 @@ class BenchSpec:
     flow_tau_s: float = 0.2
     flow_noise_rel: float = 0.003
     flow_noise_m3s: float = 1.0e-6
-    temperature_start_c: float = 40.0
-    temperature_rise_c: float = 2.0
+    temperature_start_c: float = 30.0
+    temperature_end_c: float = 70.0
+    temperature_warmup_tau_s: float = 90.0
     temperature_tau_s: float = 3.0
     temperature_noise_c: float = 0.05
     latency_s: float = 0.3e-3
@@ -107,6 +111,18 @@ class BenchSpec:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+def oil_warmup(t_s: float, start_c: float, end_c: float, tau_s: float) -> float:
+    """True oil temperature of the emulated bench at time t [°C]: first-order warm-up.
+
+    T(t) = T_end − (T_end − T_start)·exp(−t/τ): the sump heats up from the pump's
+    losses and approaches the temperature where the cooler carries them away
+    (a constant temperature for τ ≤ 0).
+    """
+    if tau_s <= 0:
+        return float(start_c)
+    return float(end_c - (end_c - start_c) * math.exp(-max(t_s, 0.0) / tau_s))
 
 
 class FirstOrderLag:

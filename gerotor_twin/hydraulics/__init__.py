@@ -16,17 +16,17 @@ module              content
                     ``FP_*`` indices); ``bulk_modulus`` β(p) — Eq. (23) of [1],
                     C¹-smoothed, with vapour floor; ``log_density`` ln(ρ/ρ₀) =
                     ∫dp/β; ``density_ratio``
-``state_equation``  :class:`StateEquation` for the kernels: ``pressure_of`` p(ln ρ)
-                    (Hermite table in the switch band), ``state_of`` (p, β),
-                    ``log_density_of``
+``state_equation``  :class:`StateEquation` for the kernels, mixture (default) or
+                    Eq. (23): ``pressure_of`` p(ln ρ) (Hermite tables), ``state_of``
+                    (p, β), ``log_density_of``, ``convert_log_density``
 ``oil``             :class:`OilProperties` vs temperature: ASTM D341 viscosity,
-                    density with thermal expansion, β_L(T) (not yet in the model)
+                    density with thermal expansion, β_L(T) (docs/fluid.md)
 ``mixture``         oil + free air + vapour barotropic mixture: closed-form
-                    s(p), β(p), inverse (not yet in the model; docs/fluid.md)
+                    s(p), β(p), inverse; :class:`AirContent` (docs/fluid.md)
 ``orifice``         Eq. (21) of [1]: ``laminar_turbulent_flow`` (Merritt's laminar
-                    Cd = δ√Re and turbulent Cd in series; default law),
+                    Cd = δ√Re and turbulent Cd in series),
                     ``orifice_flow`` with ``discharge_coefficient``
-                    Cd = Cd_max·tanh(2λ/λ_crit) (flow-number law),
+                    Cd = Cd_max·tanh(2λ/λ_crit) (flow-number law, default),
                     ``port_orifice_flow`` (the configured one)
 ``gaps``            ``slot_flow`` (plane Poiseuille, sec. 3.3–3.4);
                     ``tooth_tip_flow`` — Eq. (22) of [1], Poiseuille + Couette;

@@ -110,6 +110,7 @@ from gerotor_twin.units import P_ATM
 
 __all__ = [
     "Mixture",
+    "AirContent",
     "mixture_log_density",
     "mixture_bulk_modulus",
     "mixture_pressure",
@@ -403,8 +404,34 @@ def mixture_table(s_nodes, beta_l, alpha0, n, p_vap, p0):
 
 
 # ==========================================================================
-# User-facing container
+# User-facing containers
 # ==========================================================================
+@dataclass(frozen=True)
+class AirContent:
+    """The mixture parameters a user sets besides the oil (config section ``mixture``).
+
+    Parameters
+    ----------
+    air_fraction : float
+        Free (undissolved) air volume fraction at atmospheric pressure α₀ [-],
+        in [1e-12, 0.5]. Default 1e-3 (0.1 %, see the module docstring).
+    polytropic_index : float
+        Polytropic index n of the air [-], in [1, 1.4]. Default 1 (isothermal).
+
+    The vapour pressure is the fluid's (``fluid.vapour_pressure_pa``), β_L and ρ
+    the oil's at its temperature.
+    """
+
+    air_fraction: float = 1e-3
+    polytropic_index: float = 1.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "air_fraction", check_range("mixture.air_fraction", self.air_fraction,
+                                                             1e-12, 0.5))
+        object.__setattr__(self, "polytropic_index", check_range("mixture.polytropic_index",
+                                                                 self.polytropic_index, 1.0, 1.4))
+
+
 @dataclass(frozen=True)
 class Mixture:
     r"""Validated parameters of the oil–air–vapour mixture (SI, absolute pressures).

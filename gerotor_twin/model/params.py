@@ -6,13 +6,15 @@ Three structures, each field named once with its unit, travel together as one
 =====================  ==========================================================
 :class:`KernelTables`  geometry over the shaft angle (rows = angle samples)
 :class:`PumpConstants` clearances, conductances, orifice law, boundary, numerics
-``StateEquation``      the oil's ln ρ ⇄ p (:mod:`gerotor_twin.hydraulics.state_equation`)
+``StateEquation``      the oil's ln ρ ⇄ p (:mod:`gerotor_twin.hydraulics.state_equation`),
+                       mixture or eq. (23) (config ``fluid_model``)
 =====================  ==========================================================
 
 :class:`Operating` holds what is constant over one ``advance`` call (speed,
 port pressures and their log-densities) and :class:`Workspace` every scratch
 array of the hot loop, allocated once per model so a step allocates nothing.
-:func:`kernel_model` is the one place where config values become kernel values.
+:func:`kernel_model` is the one place where config values become kernel values;
+:func:`at_temperature` re-evaluates the oil-dependent ones at another oil temperature.
 """
 from __future__ import annotations
 
@@ -25,10 +27,10 @@ from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from ..hydraulics.orifice import ORIFICE_LAWS
-from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation
+from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation, with_liquid_modulus
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
-           "operating", "workspace", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
+           "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
            "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE"]
 
 #: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
@@ -135,9 +137,10 @@ class Workspace(NamedTuple):
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
 
 
-def _conductances(config: PumpConfig, lat: LateralGeometry) -> tuple[float, float, float]:
-    """Lateral, suction–delivery and drain conductances [m³/(s·Pa)]: flows at Δp = 1 Pa, both faces."""
-    mu, h, faces = config.fluid.viscosity_pa_s, config.clearances.lateral_m, 2.0
+def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float) -> tuple[float, float, float]:
+    """Lateral, suction–delivery and drain conductances [m³/(s·Pa)] at viscosity μ [Pa·s]: flows at Δp = 1 Pa,
+    both faces (each ∝ 1/μ)."""
+    h, faces = config.clearances.lateral_m, 2.0
     g_lat = faces * sector_circumferential_flow(1.0, h, lat.chi_lobe, lat.lobe_r_in, lat.lobe_r_out, mu)[0]
     g_sd = faces * (sector_circumferential_flow(1.0, h, lat.chi1, lat.ring_r_in, lat.ring_r_out, mu)[0]
                     + sector_circumferential_flow(1.0, h, lat.chi2, lat.ring_r_in, lat.ring_r_out, mu)[0])
@@ -146,10 +149,16 @@ def _conductances(config: PumpConfig, lat: LateralGeometry) -> tuple[float, floa
 
 
 def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeometry,
-                 eps_max: float = 0.95) -> KernelModel:
-    """Kernel view of a validated config (conductances of sec. 3.2–3.4 evaluated once)."""
-    g, f, n = config.gears, config.fluid, config.numerics
-    g_lat, g_sd, g_dr = _conductances(config, lateral)
+                 eps_max: float = 0.95, temperature_k: float | None = None) -> KernelModel:
+    """Kernel view of a validated config at oil temperature T [K] (None: the config's reference temperature).
+
+    The conductances of sec. 3.2–3.4 are evaluated once; the oil's μ, ρ₀ and β
+    are those at T (:meth:`PumpConfig.fluid_at`), the state equation is the
+    config's ``fluid_model``.
+    """
+    g, n = config.gears, config.numerics
+    f = config.fluid_at(temperature_k)
+    g_lat, g_sd, g_dr = _conductances(config, lateral, f.viscosity_pa_s)
     tab = KernelTables(rows=np.ascontiguousarray(tables.data.T), period=tables.period, shift=tables.shift,
                        scale=tables.size / tables.period)
     measure = ERROR_PRESSURE if n.error_measure == "pressure" else ERROR_LOG_DENSITY
@@ -163,7 +172,22 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         tolerance=n.tolerance, error_measure=measure,
         log_density_tolerance=n.log_density_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta)
-    return KernelModel(tab=tab, pc=pc, eos=state_equation(f))
+    return KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
+
+
+def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry,
+                   temperature_k: float | None) -> KernelModel:
+    """``km`` with the oil properties at T [K]: μ, ρ₀, the conductances (∝ 1/μ) and the state equation.
+
+    The geometry tables are shared, not rebuilt; cost ≈ 1–3 ms (the state
+    equation's table).  The state of a model must be converted with
+    :func:`~gerotor_twin.hydraulics.state_equation.convert_log_density`.
+    """
+    f = config.fluid_at(temperature_k)
+    g_lat, g_sd, g_dr = _conductances(config, lateral, f.viscosity_pa_s)
+    pc = km.pc._replace(density=f.density_kg_m3, viscosity=f.viscosity_pa_s, g_lateral=g_lat,
+                        g_suction_delivery=g_sd, g_drain=g_dr)
+    return KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air))
 
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:

@@ -2,8 +2,12 @@
 
 ``advance(state, t_span, inputs) -> (state, outputs)`` is used by the CLI, the
 node and the offline runs alike.  Inputs (shaft speed, suction and delivery
-pressure) are held constant over one call and may change between calls; the
-shaft angle is integrated from the speed.  Everything is SI: rad, rad/s,
+pressure, oil temperature) are held constant over one call and may change
+between calls; the shaft angle is integrated from the speed.  The oil
+properties follow the temperature input outside the hot loop: the kernel's
+μ, ρ₀, conductances and state equation are re-evaluated when the temperature
+has moved by more than :data:`TEMPERATURE_STEP_K` since the last evaluation,
+and the state is converted so that the pressures are continuous.  Everything is SI: rad, rad/s,
 Pa (absolute), m, m³/s, s.
 """
 from __future__ import annotations
@@ -18,13 +22,17 @@ from ..config import PumpConfig
 from ..errors import InputError
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
-from ..hydraulics.state_equation import log_density_of
+from ..hydraulics.state_equation import convert_log_density, log_density_of
 from . import kernel as K
 from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
-from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, kernel_model, operating, workspace
+from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, at_temperature, kernel_model, operating, workspace
 
-__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS"]
+__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS", "TEMPERATURE_STEP_K"]
+
+#: The kernel's oil properties are re-evaluated when the oil temperature has moved by more
+#: than this since the last evaluation [K] (μ of a VG46 oil changes by ≈ 0.2 % over it at 40 °C).
+TEMPERATURE_STEP_K = 0.05
 
 BEARING_MODELS = MODEL_NAMES      #: the outer-gear models, by name (one list: bearing.registry)
 
@@ -63,14 +71,55 @@ class PumpModel:
         self.tables = tables if tables is not None else cached_tables(
             g, config.suction_port, config.delivery_port, config.numerics.table_points, progress)
         self.lateral = lateral_geometry(g, config.suction_port, config.delivery_port)
-        self.bearing_geometry = BearingGeometry(length_m=g.width, diameter_m=2 * g.outer_radius,
-                                                clearance_m=config.clearances.housing_radial_m,
-                                                viscosity_pa_s=config.fluid.viscosity_pa_s)
-        self.bearing = make_bearing(bearing, self.bearing_geometry, **(bearing_options or {}))
+        self._bearing_options = bearing_options or {}
+        self._make_bearing(config.fluid.viscosity_pa_s)
         self.displacement = g.displacement_closed_form()   # ideal profiles; δ does not enter
         self.kernel = _with_micro_motion(kernel_model(config, self.tables, self.lateral), config, bearing)
+        #: oil temperature the kernel's properties are evaluated at [K]
+        self.temperature_k = config.reference_temperature_k
         self._ws = workspace(self.N)
         self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
+
+    def _make_bearing(self, mu: float) -> None:
+        g = self.geometry
+        self.bearing_geometry = BearingGeometry(length_m=g.width, diameter_m=2 * g.outer_radius,
+                                                clearance_m=self.config.clearances.housing_radial_m,
+                                                viscosity_pa_s=mu)
+        self.bearing = make_bearing(self.bearing_name, self.bearing_geometry, **self._bearing_options)
+
+    def set_temperature(self, t_k: float | None, log_density: np.ndarray | None = None) -> np.ndarray | None:
+        """Evaluate the oil properties at T [K] (None: the reference temperature) if it moved enough.
+
+        Parameters
+        ----------
+        t_k : float or None
+            Oil temperature [K].
+        log_density : ndarray, optional
+            A state's ln(ρ/ρ₀) under the current properties [-].
+
+        Returns
+        -------
+        ndarray or None
+            ``log_density`` converted to the new properties (same pressures), or
+            ``log_density`` itself if nothing changed.
+
+        Notes
+        -----
+        Nothing happens without an ``oil`` section (constant properties) or
+        when |T − T_kernel| ≤ :data:`TEMPERATURE_STEP_K`.  Otherwise μ, ρ₀,
+        the leakage conductances, the state equation (β_L(T)) and the
+        viscosity of an external bearing model (short, FDM) are re-evaluated
+        (≈ 1–3 ms).
+        """
+        t = self.config.reference_temperature_k if t_k is None else float(t_k)
+        if self.config.oil is None or abs(t - self.temperature_k) <= TEMPERATURE_STEP_K:
+            return log_density
+        old = self.kernel.eos
+        self.kernel = at_temperature(self.kernel, self.config, self.lateral, t)
+        self.temperature_k = t
+        if self._move == K.MOVE_EXTERNAL:
+            self._make_bearing(self.kernel.pc.viscosity)
+        return None if log_density is None else convert_log_density(log_density, old, self.kernel.eos)
 
     @property
     def restriction_mode(self) -> bool:
@@ -89,6 +138,7 @@ class PumpModel:
     def initial_state(self, inputs: Inputs, theta: float = 0.0, t: float = 0.0) -> PumpState:
         """Chambers at suction pressure, delivery volume at the delivery pressure, centred gear."""
         inputs = self.check_inputs(inputs)
+        self.set_temperature(inputs.oil_temperature)
         p = np.full(self.N + 1, inputs.p_suction)
         p[self.N] = inputs.p_delivery if not self.restriction_mode else inputs.p_suction
         for j in range(self.N):        # chambers open to the delivery port start at its pressure
@@ -114,7 +164,7 @@ class PumpModel:
         t_span : float or (t0, t1)
             Duration [s] or an interval whose start must equal ``state.t``.
         inputs : Inputs
-            Shaft speed [rad/s], suction and delivery pressure [Pa].
+            Shaft speed [rad/s], suction and delivery pressure [Pa], oil temperature [K].
 
         Returns
         -------
@@ -128,7 +178,7 @@ class PumpModel:
         h0 = self.step_size(inputs.omega)
         n = max(1, int(math.ceil(dt / h0 - 1e-9))) if dt > 0 else 0
         h = dt / n if n else 0.0
-        y = state.log_density.copy()
+        y = self.set_temperature(inputs.oil_temperature, state.log_density.copy())
         e = state.eccentricity.copy()
         counters = state.counters.copy()
         vols = state.volumes.copy()

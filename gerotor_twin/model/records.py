@@ -11,11 +11,12 @@ import numpy as np
 
 from ..config import PumpConfig
 from ..errors import InputError, check_finite
-from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
+from ..hydraulics.oil import T_MAX_K, T_MIN_K
+from ..units import bar_gauge_to_pa_abs, kelvin_to_celsius, rpm_to_rad_s
 from . import kernel as K
 from .params import N_FLOWS
 
-__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs"]
+__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs", "check_oil_temperature"]
 
 
 @dataclass(frozen=True)
@@ -31,10 +32,15 @@ class Inputs:
     p_delivery : float
         Delivery pressure, absolute [Pa] (ignored in ``restriction`` mode,
         where the delivery pressure is a state).
+    oil_temperature : float or None
+        Oil temperature [K]; None: the config's reference temperature
+        (``oil.reference_temperature_c``).  Without an ``oil`` section in the
+        config the properties do not depend on it.
     """
     omega: float
     p_suction: float
     p_delivery: float
+    oil_temperature: float | None = None
 
 
 @dataclass(frozen=True)
@@ -125,4 +131,16 @@ def check_inputs(config: PumpConfig, inputs: Inputs) -> Inputs:
     if not (config.boundary.mode == "restriction" or ps - 0.5e5 <= pd <= pmax * 1.0001):
         raise InputError("delivery_pressure", pd,
                          f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (0–{rng.max_delivery_bar:g} bar gauge)")
-    return Inputs(w, ps, pd)
+    return Inputs(w, ps, pd, check_oil_temperature(inputs.oil_temperature))
+
+
+def check_oil_temperature(t_k: float | None) -> float | None:
+    """The oil temperature [K] as a float in the range of the oil laws, None passed through; else
+    :class:`InputError` naming ``oil_temperature``, the value and the range [K] (°C)."""
+    if t_k is None:
+        return None
+    t = check_finite("oil_temperature", t_k)
+    if not T_MIN_K <= t <= T_MAX_K:
+        raise InputError("oil_temperature", t, f"[{T_MIN_K:g}, {T_MAX_K:g}] K "
+                                               f"({kelvin_to_celsius(T_MIN_K):g}–{kelvin_to_celsius(T_MAX_K):g} °C)")
+    return t

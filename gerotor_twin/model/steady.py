@@ -65,7 +65,8 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, m
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
                rtol: float = 2e-4, p_suction: float | None = None, progress=None,
-               state: PumpState | None = None, etol: float = 2e-3) -> SteadyResult:
+               state: PumpState | None = None, etol: float = 2e-3,
+               oil_temperature: float | None = None) -> SteadyResult:
     """Run revolutions until the revolution-mean delivery flow settles, then record one.
 
     Parameters
@@ -85,6 +86,8 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
         Settling criterion on the change of the revolution-mean eccentricity, as a
         fraction of the housing clearance c [-] (the outer gear settles more slowly
         than the pressures).
+    oil_temperature : float, optional
+        Oil temperature [K] (default: the config's reference temperature).
     """
     if not (math.isfinite(rpm) and rpm > 0):
         raise InputError("--rpm", rpm, f"(0, {model.config.range.max_speed_rpm:g}] rpm")
@@ -92,15 +95,17 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
         raise InputError("--bar", bar, f"[0, {model.config.range.max_delivery_bar:g}] bar")
     p_atm = model.config.fluid.atmospheric_pa
     ps = model.config.boundary.suction_pressure_pa if p_suction is None else p_suction
-    inputs = Inputs(rpm_to_rad_s(rpm), ps, bar_gauge_to_pa_abs(bar, p_atm))
+    inputs = Inputs(rpm_to_rad_s(rpm), ps, bar_gauge_to_pa_abs(bar, p_atm), oil_temperature)
     try:
         inputs = model.check_inputs(inputs)
     except InputError as exc:
-        name = {"shaft_speed": "--rpm", "delivery_pressure": "--bar"}.get(exc.field, exc.field)
+        name = {"shaft_speed": "--rpm", "delivery_pressure": "--bar",
+                "oil_temperature": "--oil-temp"}.get(exc.field, exc.field)
         rng = model.config.range
         allowed = {"--rpm": f"(0, {rng.max_speed_rpm:g}] rpm",
                    "--bar": f"[0, {rng.max_delivery_bar:g}] bar"}.get(name, exc.allowed)
-        raise InputError(name, rpm if name == "--rpm" else bar, allowed) from None
+        value = {"--rpm": rpm, "--bar": bar}.get(name, exc.value)
+        raise InputError(name, value, allowed) from None
     period = 2 * math.pi / inputs.omega
     state = model.initial_state(inputs) if state is None else state
     c = model.config.clearances.housing_radial_m

@@ -26,7 +26,8 @@ def with_clearances(cfg: PumpConfig, tooth_tip_m: float, lateral_m: float) -> Pu
 
 
 def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEEDS_RPM,
-                      pressures=PRESSURES_BAR, progress=None, model_cache: dict | None = None) -> list[dict]:
+                      pressures=PRESSURES_BAR, progress=None, model_cache: dict | None = None,
+                      fluid_model: str = "paper") -> list[dict]:
     """Volumetric efficiency of every (model, speed, pressure) point.
 
     Parameters
@@ -41,6 +42,8 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         Delivery pressures [bar gauge].
     progress : callable, optional
         Called as ``progress(done, total, point)`` after each point.
+    fluid_model : {"paper", "mixture"}
+        State equation of the oil: eq. (23) of [1] (default, as calibrated) or the mixture.
 
     Returns
     -------
@@ -49,7 +52,7 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         the paper has no value), ``difference`` [-] (model − paper), ``mean_eccentricity_m``,
         ``min_tooth_gap_m``, ``revolutions``, ``counts``.
     """
-    cfg = replace(cfg, boundary=replace(cfg.boundary, mode="imposed"))
+    cfg = replace(cfg.with_fluid_model(fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
     cache = {} if model_cache is None else model_cache
     total = len(models) * len(speeds) * len(pressures)
     points = []

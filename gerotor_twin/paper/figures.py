@@ -63,8 +63,8 @@ def _models(runs):
 
 
 def fig12(cfg: PumpConfig, path, speeds=(1000.0, 3000.0), pressures=(5.0, 15.0, 27.5)) -> Path:
-    """Tooth-1 gap height vs angle, mobility model, at several speeds and pressures."""
-    model = PumpModel(cfg, "mobility")
+    """Tooth-1 gap height vs angle, mobility model, at several speeds and pressures (eq. (23) oil)."""
+    model = PumpModel(cfg.with_fluid_model("paper"), "mobility")
     period = model.tables.period
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     for ls, rpm in zip(("-", "--", ":"), speeds):
@@ -160,7 +160,7 @@ def write_figures(cfg: PumpConfig, out_dir, models=MODEL_NAMES, progress=print):
     out = Path(out_dir)
     runs = run_section4(cfg, models, progress=progress)
     progress(f"  restriction area {runs['restriction_area_m2'] * 1e6:.4f} mm²; fig. 12 sweep ...")
-    tables_model = PumpModel(cfg, "fixed")
+    tables_model = PumpModel(cfg.with_fluid_model("paper"), "fixed")
     period, p_atm = tables_model.tables.period, cfg.fluid.atmospheric_pa
     return [fig12(cfg, out / "fig12_gap_vs_pressure_speed.png"),
             fig13(runs, cfg, out / "fig13_trajectories.png"),

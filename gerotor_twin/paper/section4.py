@@ -30,14 +30,15 @@ SECTION4_RPM = 1000.0   #: shaft speed of the figs. 13–16 runs [rpm] ("low rot
 SECTION4_BAR = 27.5     #: mean delivery pressure the restriction is sized for [bar gauge]
 
 
-def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SECTION4_BAR) -> float:
+def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SECTION4_BAR,
+                     fluid_model: str = "paper") -> float:
     """Orifice area [m²] that passes the fixed-centre pump's net delivery at ``bar`` gauge.
 
     The net flow to the restriction is the revolution-mean delivered flow (port flow
     minus the suction–delivery and drain leakages) of the periodic state at imposed pressure; the area follows from Eq. (21) of [1] with the
     configured Cd(λ) law (solved with :func:`scipy.optimize.brentq`).
     """
-    imposed = replace(cfg, boundary=replace(cfg.boundary, mode="imposed"))
+    imposed = replace(cfg.with_fluid_model(fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
     res = run_steady(PumpModel(imposed, "fixed"), rpm, bar)
     o = res.outputs
     q = float(np.mean(o.delivery_flow))
@@ -49,7 +50,7 @@ def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SE
 
 
 def run_section4(cfg: PumpConfig, models=MODEL_NAMES, rpm: float = SECTION4_RPM,
-                 bar: float = SECTION4_BAR, progress=None) -> dict[str, SteadyResult]:
+                 bar: float = SECTION4_BAR, progress=None, fluid_model: str = "paper") -> dict[str, SteadyResult]:
     """Periodic state of each model on the same restricted delivery line.
 
     ``short`` and ``fdm`` start from the mobility model's periodic state (they would
@@ -62,7 +63,8 @@ def run_section4(cfg: PumpConfig, models=MODEL_NAMES, rpm: float = SECTION4_RPM,
         under the key ``"restriction_area_m2"``, and ``"cycles"`` maps each model to its
         :func:`chamber_cycle` outputs.
     """
-    area = restriction_area(cfg, rpm, bar)
+    cfg = cfg.with_fluid_model(fluid_model)     # the paper's eq. (23) unless asked otherwise
+    area = restriction_area(cfg, rpm, bar, fluid_model)
     rcfg = replace(cfg, boundary=replace(cfg.boundary, mode="restriction", restriction_area_m2=area))
     out: dict = {"restriction_area_m2": area, "cycles": {}}
     warm = None

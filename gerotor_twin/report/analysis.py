@@ -75,6 +75,28 @@ def make_grid(bench: BenchData, span: tuple[float, float], dt: float = 0.1) -> G
                 p_delivery=binned(*bench.delivery_pressure, edges), q_meas=binned(*bench.flow, edges))
 
 
+def plateau_temperatures(bench: BenchData, grid: Grid, plateaus: list[Plateau]) -> list[float | None]:
+    """Mean bench oil temperature [°C] over each plateau (None without ``/bench/oil_temperature``)."""
+    if bench.temperature is None or grid.t.size == 0:
+        return [None] * len(plateaus)
+    dt = grid.t[1] - grid.t[0] if grid.t.size > 1 else 0.1
+    edges = np.concatenate([grid.t - dt / 2, [grid.t[-1] + dt / 2]])
+    temp = binned(*bench.temperature, edges)
+    out = []
+    for p in plateaus:
+        v = temp[p.i0:p.i1]
+        v = v[np.isfinite(v)]
+        out.append(float(v.mean()) if v.size else None)
+    return out
+
+
+def add_temperatures(comp: dict, temps: list[float | None]) -> dict:
+    """Put each plateau's oil temperature [°C] (``oil_temperature_c``) into the rows of a :func:`compare` result."""
+    for row, tc in zip(comp["plateaus"], temps):
+        row["oil_temperature_c"] = tc
+    return comp
+
+
 def on_grid(grid: Grid, t: np.ndarray, v: np.ndarray) -> np.ndarray:
     """A twin series averaged on ``grid``'s bins."""
     dt = grid.t[1] - grid.t[0] if grid.t.size > 1 else 0.1

@@ -10,7 +10,7 @@ from gerotor_twin.errors import InputError, one_line
 
 from . import layout
 from .acceptance import FAIL, NO_DATA, PASS, AcceptanceCriterion, add_arguments, criterion_from_args, verdict
-from .analysis import compare, find_plateaus, make_grid
+from .analysis import add_temperatures, compare, find_plateaus, make_grid, plateau_temperatures
 from .context import ReportContext
 from .data import load_bench, load_twin, overlap, pump_config
 from .html import render
@@ -70,7 +70,8 @@ def make_context(bench, twins, criterion: AcceptanceCriterion, stem: str,
     cfg = pump_config(twins[0])
     plateaus = find_plateaus(grid, p_atm=cfg.fluid.atmospheric_pa)
     disp = cfg.gears.displacement_closed_form()
-    comps = [compare(grid, plateaus, tw, disp) for tw in twins]
+    temps = plateau_temperatures(bench, grid, plateaus)
+    comps = [add_temperatures(compare(grid, plateaus, tw, disp), temps) for tw in twins]
     verdicts = tuple(tuple(verdict(r, criterion) for r in c["plateaus"]) for c in comps)
     return ReportContext(bench, tuple(twins), grid, tuple(plateaus), tuple(comps), verdicts, cfg, disp, criterion,
                          span, stem, max_points)

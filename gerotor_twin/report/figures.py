@@ -106,12 +106,12 @@ def fig_efficiency_map(comps: list[dict]) -> bytes:
         y = [np.mean([rows[i]["bar"] for i in g]) for g in groups]
         z = [np.nan if v is None else v * 100 for v in vs]
         sc = ax.scatter(x, y, c=z, s=200, cmap="viridis", vmin=vmin, vmax=vmax, edgecolor="k")
-        for xi, yi, zi, g in zip(x, y, z, groups):
-            ax.annotate(f"{zi:.1f}" + (f" ({len(g)}×)" if len(g) > 1 else ""), (xi, yi), textcoords="offset points",
-                        xytext=(0, 9), ha="center", fontsize=9)
+        temps = [rows[g[0]].get("oil_temperature_c") for g in groups]
+        for xi, yi, zi, g, tc in zip(x, y, z, groups, temps):
+            label = f"{zi:.1f}" + (f" ({len(g)}×)" if len(g) > 1 else "") + ("" if tc is None else f"\n{tc:.0f} °C")
+            ax.annotate(label, (xi, yi), textcoords="offset points", xytext=(0, 9), ha="center", fontsize=9)
         ax.set_title(title)
         ax.margins(0.15, 0.2)
-    for ax in axes[-1]:
         ax.set_xlabel("speed [rpm]")
     for ax in axes[:, 0]:
         ax.set_ylabel("delivery p [bar g]")

@@ -63,6 +63,7 @@ def img_gaps(ctx: ReportContext) -> Image:
 PAGE = [
     TS.ts_speed,
     TS.ts_pressure,
+    TS.ts_oil_temperature,
     TS.ts_flow,
     TS.ts_residual,
     TS.ts_efficiency,

@@ -41,6 +41,7 @@ PLATEAU_COLUMNS = (
     Column("plateau", "{:d}"), Column("verdict", "{}", True), Column("t [s]", "{}", csv=False),
     Column("t start [s]", "{:.1f}", html=False), Column("t end [s]", "{:.1f}", html=False),
     Column("speed [rpm]", "{:.0f}"), Column("delivery p [bar g]", "{:.2f}"),
+    Column("oil [°C]", "{:.1f}"),
     Column("flow measured [L/min]"), Column("flow predicted [L/min]"), Column("flow bias [L/min]", "{:+.3f}"),
     Column("flow RMSE [L/min]"), Column("flow max |err| [L/min]"), Column("flow tolerance ± [L/min]"),
     Column("eta_v measured [%]", "{:.2f}"), Column("eta_v predicted [%]", "{:.2f}"),
@@ -53,7 +54,8 @@ def _plateau_row(r: dict, v: dict) -> tuple:
     d = None if r["eta_predicted"] is None or r["eta_measured"] is None else r["eta_predicted"] - r["eta_measured"]
     fe = r["flow_error_m3s"]
     return (r["plateau"], v["verdict"].upper() + (f" ({', '.join(v['failed'])})" if v["failed"] else ""),
-            f"{r['t0_s']:.1f}–{r['t1_s']:.1f}", r["t0_s"], r["t1_s"], r["rpm"], r["bar"], _lpm(r["flow_measured_m3s"]),
+            f"{r['t0_s']:.1f}–{r['t1_s']:.1f}", r["t0_s"], r["t1_s"], r["rpm"], r["bar"], r.get("oil_temperature_c"),
+            _lpm(r["flow_measured_m3s"]),
             _lpm(r["flow_predicted_m3s"]), _lpm(fe["bias"]), _lpm(fe["rmse"]), _lpm(fe["max_abs"]),
             _lpm(v["flow_tol_m3s"]), _pct(r["eta_measured"]), _pct(r["eta_predicted"]), _pct(d),
             _pct(v["eta_tol"]), "; ".join(v["reasons"]))

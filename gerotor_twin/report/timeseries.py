@@ -56,6 +56,13 @@ def ts_pressure(ctx: ReportContext) -> TimeSeries | None:
                        "Bench delivery pressure (gauge): raw samples and 0.1 s means.", 3)
 
 
+def ts_oil_temperature(ctx: ReportContext) -> TimeSeries | None:
+    return bench_panel(ctx, "ts-oil-temperature", OPERATING, "oil temperature [°C]", ctx.bench.temperature,
+                       lambda c: c, "oil temperature",                       # sensor_msgs/Temperature: °C
+                       "Bench oil temperature: raw samples and 0.1 s means (the twin's oil properties follow "
+                       "it, docs/fluid.md); none when the bag has no /bench/oil_temperature.", 1)
+
+
 def _flow_tolerance(ctx: ReportContext) -> Band | None:
     rows = ctx.comps[0]["plateaus"] if ctx.comps else []
     tols = [v["flow_tol_m3s"] for v in ctx.verdicts[0]] if ctx.verdicts else []

@@ -59,7 +59,8 @@ PARAMETERS: tuple[Param, ...] = (
     Param("delivery_flow_topic", "bench/delivery_flow",
           "std_msgs/Float64 measured delivery flow [m^3/s] (optional, for live residuals; '' = off)"),
     Param("oil_temperature_topic", "bench/oil_temperature",
-          "sensor_msgs/Temperature oil temperature [degC] (optional, reported only; '' = off)"),
+          "sensor_msgs/Temperature oil temperature [degC] (optional; sets the oil properties, else the "
+          "config's reference temperature; '' = off)"),
     Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
                                      "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
     Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",

@@ -23,6 +23,7 @@ from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.events import EventLog
 from gerotor_twin.twin.input_book import InputBook
 from gerotor_twin.twin.inputs import REQUIRED
+from gerotor_twin.twin.oil_temperature import OilTemperature
 from gerotor_twin.twin.revolution import RevolutionRecorder
 from gerotor_twin.twin.settings import NS, TwinSettings
 
@@ -67,6 +68,8 @@ class ClockDriver:
         self.book = book
         self.recorder = recorder
         self.events = events
+        #: the oil temperature the model runs at (measured or the config's reference)
+        self.oil = OilTemperature(model.config.reference_temperature_k, settings.stale_timeout_s, events)
         self.N = model.N
         self._S = settings.sample_ns
         self.state: PumpState | None = None
@@ -192,8 +195,9 @@ class ClockDriver:
             return None
         ps_v = vals["suction_pressure"]
         ps = ps_v[0] if ps_v is not None and g - ps_v[1] <= stale else self.book.default_ps
+        t_oil = self.oil.at(g, vals["oil_temperature"])
         try:
-            return self.model.check_inputs(Inputs(vals["shaft_speed"][0], ps, vals["delivery_pressure"][0]))
+            return self.model.check_inputs(Inputs(vals["shaft_speed"][0], ps, vals["delivery_pressure"][0], t_oil))
         except InputError as exc:
             self._hold(g, f"inputs inconsistent: {exc}")
             return None

@@ -284,6 +284,7 @@ class TwinCore:
             "model_time_ns": t_ns, "eccentricity_ratio": ecc_ratio,
             "counts": self.counts(), "inputs": self.input_report(now_ns),
             "last_summary": dict(zip(O.SUMMARY_FIELDS, last)) if last else None,
+            **self.driver.oil.report(), "oil_temperature_warn": self.driver.oil.warn,
         }
         snap.update({k: (dict(v) if isinstance(v, collections.Counter) else v) for k, v in self.stats.items()})
         return snap

@@ -36,6 +36,9 @@ def model_status(snap: dict, delta: dict[str, int]) -> dict:
         rtf = snap["real_time_factor"]
         if rtf is not None and rtf < 1.0:
             level, msg = m.DIAG_WARN, f"running slower than real time (RTF {rtf:.2f}); lag policy skips backlog"
+        if snap.get("oil_temperature_warn"):
+            level = m.DIAG_WARN
+            msg += (f"; oil temperature stale: using the reference {snap['oil_temperature_c']:g} °C")
     elif snap["status"] == "held":
         level, msg = m.DIAG_STALE, f"held: {snap['reason']}"
     else:
@@ -56,6 +59,9 @@ def model_status(snap: dict, delta: dict[str, int]) -> dict:
         "solver_rejected_substeps": counts.get("rejected_substeps", 0),
         "solver_failures": counts.get("solver_failures", 0) + resets.get("solver_failure", 0),
         "eccentricity_ratio": _fmt(snap["eccentricity_ratio"]),
+        "oil_temperature_c": _fmt(snap.get("oil_temperature_c")),
+        "oil_temperature_source": _fmt(snap.get("oil_temperature_source")),
+        "oil_temperature_fallbacks": snap.get("oil_temperature_fallbacks", 0),
     }
     for k in _EVENTS:
         values[k] = counts.get(k, 0)

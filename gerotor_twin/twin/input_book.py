@@ -19,6 +19,8 @@ import threading
 from typing import Any
 
 from gerotor_twin.errors import InputError
+from gerotor_twin.hydraulics.oil import T_MAX_K, T_MIN_K
+from gerotor_twin.units import kelvin_to_celsius
 from gerotor_twin.model.pump import Inputs, PumpModel
 from gerotor_twin.twin.events import EventLog
 from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputChannel, sample_from_message
@@ -29,8 +31,8 @@ from gerotor_twin.twin.stamps import REBASE, RESTART, StampGuard
 
 __all__ = ["InputBook"]
 
-#: Plausible oil temperature [°C].
-_TEMP_RANGE_C = (-50.0, 250.0)
+#: Oil temperature accepted [°C]: the range of the oil laws (hydraulics.oil).
+_TEMP_RANGE_C = (kelvin_to_celsius(T_MIN_K), kelvin_to_celsius(T_MAX_K))
 
 
 def _check_kind(kind: str) -> None:
