@@ -152,7 +152,7 @@ def test_node_and_run_bag_agree(tmp_path):
     # the report reads the node's log and the offline run alike, every figure drawn
     from gerotor_twin.report.build import build_report
     res = build_report(bag, [node_log, off], tmp_path / "r.html", labels=["node", "run-bag"])
-    assert res["figures_drawn"] == 5 and res["interactive_plots"] == 5 and len(res["plateaus"]) == 1
+    assert res["figures_drawn"] == 5 and res["interactive_plots"] == 6 and len(res["plateaus"]) == 1  # speed, pressure, oil T, flow, error, η
     a, b = (t["overall"]["flow_error_m3s"]["bias"] for t in res["twins"])
     assert abs(a - b) < 2e-3 * np.mean(vo[sel, 0])
 
