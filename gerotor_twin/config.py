@@ -7,7 +7,7 @@ naming the dotted field, the value and the allowed range.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -138,6 +138,7 @@ class PumpConfig:
     range: OperatingRange
     numerics: Numerics
     source: str = "<memory>"
+    calibration: dict | None = field(default=None, compare=False, hash=False)  #: provenance of a fitted config (``gerotor-twin calibrate``), kept as written
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -158,6 +159,7 @@ class PumpConfig:
             "boundary": _asdict(self.boundary),
             "range": _asdict(self.range),
             "numerics": _asdict(self.numerics),
+            **({"calibration": self.calibration} if self.calibration is not None else {}),
         }
 
 
@@ -165,7 +167,8 @@ def _asdict(obj) -> dict:
     return {f.name: getattr(obj, f.name) for f in fields(obj)}
 
 
-_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics"}
+_SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
+             "calibration"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -257,7 +260,17 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     _check_ports(ports["suction"], ports["delivery"])
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,
-                      boundary=boundary, range=rng, numerics=num, source=source)
+                      boundary=boundary, range=rng, numerics=num, source=source,
+                      calibration=_calibration_block(raw.get("calibration")))
+
+
+def _calibration_block(sec) -> dict | None:
+    """The optional ``calibration`` provenance block: a mapping, kept as written (not used by the model)."""
+    if sec is None:
+        return None
+    if not isinstance(sec, dict):
+        raise InputError("calibration", sec, "a mapping (the provenance written by `gerotor-twin calibrate`)")
+    return sec
 
 
 def _check_ports(s: Port, d: Port) -> None:
