@@ -174,7 +174,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
             ps = suction(w)
             state, out = model.advance(state, dt, Inputs(w, ps, pd))
             q_inst = float(out.delivery_flow[-1])
-            q_mean = float(np.mean(out.delivery_flow))
+            q_mean = tick_mean_flow(out)
             true_q[k], true_w[k] = q_mean, w
             t = (k + 1) * dt
             t_ns = t0_ns + int(round(t * 1e9))
@@ -208,6 +208,15 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     show(profile.duration_s, done=True)
     return {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed,
             "message_counts": counts, "truth": _truth(profile, cfg, model, true_q, true_w, dt)}
+
+
+def tick_mean_flow(out) -> float:
+    """Net delivered flow over one emulator tick [m³/s]: the integrated delivered volume / tick.
+
+    (The unweighted mean of the step-end samples ``out.delivery_flow`` read ≈ 0.1 % low at 0.5°
+    steps with the flow ripple — the twin's summaries integrate the volume, so the bench must too.)
+    """
+    return float(out.volumetric_efficiency * out.theoretical_flow)
 
 
 def _truth(profile: Profile, cfg: PumpConfig, model: PumpModel, q: np.ndarray, w: np.ndarray,

@@ -125,8 +125,9 @@ def fitted_config(result: dict) -> dict:
     return raw
 
 
-def print_summary(result: dict, out=sys.stdout) -> None:
+def print_summary(result: dict, out=None) -> None:
     """The figures a bench engineer looks at first."""
+    out = out or sys.stdout
     f = result["fit"]
     for p in f["parameters"]:
         u = 1e6 if p["unit"] == "m" else 1.0

@@ -4,7 +4,7 @@ One :class:`PlateauRecord` per steady stretch found by
 :func:`gerotor_twin.report.analysis.find_plateaus` on the bench series averaged on
 a 0.1 s grid: the mean measured speed, delivery and suction pressure, oil
 temperature and delivery flow over the plateau, and the standard error of the
-mean flow from the scatter of the grid bins.  SI units throughout.
+mean flow (bin scatter, or batch means when larger).  SI units throughout.
 """
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ class PlateauRecord:
     p_suction_pa: float          #: mean suction pressure [Pa abs] (NaN: not recorded)
     oil_temperature_c: float     #: mean oil temperature [°C] (NaN: not recorded)
     flow_m3s: float              #: mean measured delivery flow [m³/s]
-    flow_sem_m3s: float          #: standard error of that mean (bin scatter / √bins) [m³/s]
+    flow_sem_m3s: float          #: standard error of that mean (see :func:`mean_standard_error`) [m³/s]
     bins: int                    #: grid bins averaged [-]
 
     @property
@@ -56,6 +56,25 @@ class PlateauRecord:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+def mean_standard_error(v: np.ndarray, dt: float, batch_s: float = 0.5) -> float:
+    """Standard error of the mean of a binned series [units of v], robust to correlated noise.
+
+    The larger of the bin scatter / √bins and the batch-means estimate (batches of ``batch_s``
+    [s], at least 3): slow components (aliased flow ripple, a meter's drift) correlate
+    neighbouring bins, which the bin scatter alone would miss.
+    """
+    v = v[np.isfinite(v)]
+    if v.size < 2:
+        return math.nan
+    sem = float(v.std(ddof=1) / math.sqrt(v.size))
+    k = max(1, int(round(batch_s / dt)))
+    nb = v.size // k
+    if nb >= 3:
+        means = v[:nb * k].reshape(nb, k).mean(axis=1)
+        sem = max(sem, float(means.std(ddof=1) / math.sqrt(nb)))
+    return sem
 
 
 def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
@@ -83,7 +102,7 @@ def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> lis
     for p in plateaus:
         q = grid.q_meas[p.i0:p.i1]
         q = q[np.isfinite(q)]
-        sem = float(q.std(ddof=1) / math.sqrt(q.size)) if q.size > 1 else math.nan
+        sem = mean_standard_error(q, dt)
         out.append(PlateauRecord(
             bag=str(path), index=p.index, t0_s=p.t0, t1_s=p.t1,
             omega=float(np.mean(grid.omega[p.i0:p.i1])), p_delivery_pa=float(np.mean(grid.p_delivery[p.i0:p.i1])),
