@@ -78,11 +78,19 @@ def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: 
     opts = {"rcond": rcond, "flow_floor": flow_floor}
     (out, wall) = C.run_timed(_run, records, raw, params, model, holdout, jobs, displacement, opts, say)
     out.update({"bags": [str(b) for b in bags], "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-                "prior_config": cfg.source, "model": model, "params": list(params), "holdout_every": holdout,
+                "prior_config": _display_path(cfg.source), "model": model, "params": list(params), "holdout_every": holdout,
                 "wall_time_s": wall, "software": f"gerotor_twin {__version__}",
                 "plateau_records": [r.as_dict() for r in records], "detector": detector.__dict__})
     out["config"] = apply(raw, params, np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
     return out
+
+
+def _display_path(path) -> str:
+    """``path`` relative to the current directory when it lies below it (portable provenance)."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
 
 
 def _run(records, raw, params, model, holdout, jobs, displacement, opts, say) -> dict:

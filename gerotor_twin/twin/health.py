@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import collections
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
@@ -258,16 +258,6 @@ class HealthMonitor:
 
 
 def set_leakage_factor(model, base_config, k: float) -> None:
-    """Give ``model`` the tooth-tip and lateral clearances of ``base_config`` × k^(1/3) (in place).
-
-    The geometry tables are kept (δ only shifts the inner profile by O(δ/R) in them; the
-    kernel takes the gap height from the clearance it is given).
-    """
-    from gerotor_twin.model.params import kernel_model
-    c = k ** (1.0 / 3.0)
-    clear = replace(base_config.clearances, tooth_tip_m=base_config.clearances.tooth_tip_m * c,
-                    lateral_m=base_config.clearances.lateral_m * c)
-    cfg = replace(base_config, clearances=clear, gears=replace(base_config.gears, tip_clearance=clear.tooth_tip_m))
-    tables = replace(model.tables, tip_clearance=clear.tooth_tip_m)
-    model.kernel = kernel_model(cfg, tables, model.lateral)
-    model.config, model.geometry, model.tables = cfg, cfg.gears, tables
+    """Give ``model`` the clearances of ``base_config`` × k^(1/3) (Poiseuille: leakage ∝ h³), in place."""
+    from gerotor_twin.model.clearance_scale import scale_clearances
+    scale_clearances(model, base_config, k ** (1.0 / 3.0))
