@@ -69,7 +69,7 @@ class HealthSettings:
     min_flow_samples: int = 3
     meter_sd_rel: float = 0.005
     model_sd_rel: float = 0.003
-    drift_per_sqrt_s: float = 0.01
+    drift_per_sqrt_s: float = 0.02
     initial_sd: float = 0.5
     warn_pt: float = 2.0
     error_pt: float = 5.0
