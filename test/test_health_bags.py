@@ -123,3 +123,25 @@ def test_no_false_alarm_on_healthy_bag(tmp_path):
     assert {r["level"] for r in rows} <= {0.0, 3.0}
     assert set(_health_statuses(out)) <= {0, 3}
     assert max(abs(r["leakage_factor"] - 1) for r in rows) < 0.05
+
+
+def test_health_command_lists_alarm_intervals(wear_run, tmp_path, capsys):
+    """Behaviour: `gerotor-twin health` prints the updates and the WARN then ERROR intervals, JSON alike."""
+    from gerotor_twin.cli import main
+    js = tmp_path / "h.json"
+    assert main(["health", str(wear_run), "--every", "10", "--json", str(js)]) == 0
+    out = capsys.readouterr().out
+    assert "WARN from" in out and "ERROR from" in out
+    alarms = json.loads(js.read_text())["alarms"]
+    assert [a[0] for a in alarms] == ["WARN", "ERROR"] and alarms[0][2] < alarms[1][1]
+
+
+@pytest.mark.parametrize("item", ["bogus=1", "adapt=maybe", "warn_pt=x", "warn_pt=-3"])
+def test_run_bag_bad_health_setting(tmp_path, capsys, item):
+    """Bad input: a bad --health item is one line naming the setting; nothing is written."""
+    from gerotor_twin.cli import main
+    out = tmp_path / "o.mcap"
+    assert main(["run-bag", str(BAGS / "bench_transient.mcap"), "-o", str(out), "--health", item, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert ("--health" in err or "health_warn_pt" in err) and len(err.strip().splitlines()) == 1
+    assert not out.exists()
