@@ -7,7 +7,9 @@ What is estimated
     the flow loss the twin predicts with its configured (calibrated) leakage, by the
     scalar Kalman filter of :mod:`.leakage_filter` (random-walk drift ``drift_per_sqrt_s``).
     ``k = 1``: the pump is as calibrated; wear opens the clearances and raises ``k``
-    (Poiseuille leakage ∝ h³, so the equivalent clearance factor is ``k^(1/3)``).
+    (the equivalent common clearance factor is ``k^(1/n)``, n the exponent of the flow loss
+    against the clearances at the reference point, :func:`clearance_exponent`; ≈ 3 for
+    Poiseuille leakage).
 When it is updated (robust to ramps and to the flow meter's lag)
     Once per *settled interval*: the clock is cut into windows of ``window_s``; a
     window is used only when the model's speed and delivery pressure stayed within
@@ -19,7 +21,7 @@ When it is updated (robust to ramps and to the flow meter's lag)
     loss / the factor the model runs with; noise variance
     (``meter_sd_rel`` · q)²/n + (``model_sd_rel`` · q)².
 What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
-    k and its standard deviation, the clearance factor k^(1/3), the volumetric
+    k and its standard deviation, the clearance factor k^(1/n), the volumetric
     efficiency at the reference point (``reference_rpm``, ``reference_bar``) with k
     and its standard deviation, the same with k = 1 (calibrated), the residual
     (measured − predicted mean flow) of this interval, the mean and RMS of the last
@@ -33,7 +35,7 @@ Status (``/diagnostics`` ``gerotor_twin: health``)
 ``adapt``
     False (default): a pure monitor, the model keeps its configured leakage.  True:
     after each update that moved k by more than 1 % from the factor in use, the model's
-    tooth-tip and lateral clearances are set to the configured ones × k^(1/3), so the
+    tooth-tip and lateral clearances are set to the configured ones × k^(1/n), so the
     predictions follow the pump (the residuals then stay near zero and the drop shows
     in the published k and reference efficiency only).
 """
@@ -100,6 +102,24 @@ class HealthSettings:
         return asdict(self)
 
 
+def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> float:
+    """Exponent n of the flow loss against a common clearance scale c at the reference point, L ∝ cⁿ [-].
+
+    ≈ 3 for pure Poiseuille leakage; less where filling losses and Couette terms count.  Used to
+    turn a leakage factor k into the clearance factor k^(1/n) (published, and applied by ``adapt``).
+    """
+    from gerotor_twin.model.clearance_scale import scale_clearances
+    base = model.config
+    loss0, _ = reference_loss(model, settings)
+    try:
+        scale_clearances(model, base, step)
+        loss1, _ = reference_loss(model, settings)
+    finally:
+        scale_clearances(model, base, 1.0)
+    n = math.log(loss1 / loss0) / math.log(step) if loss0 > 0 and loss1 > 0 else 3.0
+    return n if math.isfinite(n) and n > 0.5 else 3.0
+
+
 def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
     """Flow loss and theoretical flow [m³/s] of ``model`` at the reference point (periodic steady state).
 
@@ -130,6 +150,7 @@ class HealthMonitor:
         self.base_config = model.config
         self.k_applied = 1.0
         self.loss_ref, self.qth_ref = reference_loss(model, s) if s.enabled else (math.nan, math.nan)
+        self.exponent = clearance_exponent(model, s) if s.enabled else 3.0
         self.est = lf.LeakageEstimate(var=s.initial_sd ** 2)
         self._flow: collections.deque = collections.deque(maxlen=100_000)
         self._res: collections.deque = collections.deque(maxlen=s.residual_window)
@@ -204,8 +225,9 @@ class HealthMonitor:
                               m.float64_multiarray(values, (",".join(HEALTH_FIELDS),)))]
 
     def _adapt(self, k: float) -> None:
-        set_leakage_factor(self.model, self.base_config, max(k, 1e-3))
+        from gerotor_twin.model.clearance_scale import scale_clearances
         self.k_applied = max(k, 1e-3)
+        scale_clearances(self.model, self.base_config, self.k_applied ** (1.0 / self.exponent))
 
     # ------------------------------------------------------------- figures
     def reference_efficiency(self, k: float) -> float:
@@ -232,7 +254,7 @@ class HealthMonitor:
         res = list(self._res)
         mean = sum(res) / len(res) if res else math.nan
         rms = math.sqrt(sum(v * v for v in res) / len(res)) if res else math.nan
-        return [e.k, e.sd, max(e.k, 0.0) ** (1 / 3), self.reference_efficiency(e.k), e.sd * self.loss_ref / self.qth_ref,
+        return [e.k, e.sd, max(e.k, 0.0) ** (1 / self.exponent), self.reference_efficiency(e.k), e.sd * self.loss_ref / self.qth_ref,
                 self.reference_efficiency(1.0), self.last_residual, mean, rms, e.innovation, float(e.updates),
                 float(self.level())]
 
@@ -255,9 +277,3 @@ class HealthMonitor:
                      "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
                      "drop_pt": f"{self.drop_pt():.3f}"})
         return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)
-
-
-def set_leakage_factor(model, base_config, k: float) -> None:
-    """Give ``model`` the clearances of ``base_config`` × k^(1/3) (Poiseuille: leakage ∝ h³), in place."""
-    from gerotor_twin.model.clearance_scale import scale_clearances
-    scale_clearances(model, base_config, k ** (1.0 / 3.0))
