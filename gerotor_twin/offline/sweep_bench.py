@@ -1,0 +1,101 @@
+"""``gerotor-twin bench sweep``: design-study points per second on 1, 2, ... Dask workers (printed, never a test).
+
+The study timed is a geometry study (Latin hypercube over eccentricity and lobe
+radius, one operating point, the twin's mobility model, the default numerics):
+every point builds its own geometry tables, the expensive part of a real design
+study.  The table cache is pointed at a fresh directory per run so that each
+run pays that cost.  Wall time includes starting the embedded cluster; the
+speed-up is the ratio of points per second to the single worker's.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from ..errors import InputError
+
+__all__ = ["bench_sweep", "add_to_bench"]
+
+BENCH_SPEC = {
+    "title": "bench sweep: eccentricity x lobe radius (LHS), mobility model",
+    "model": "mobility",
+    "operating": {"speed_rpm": 2000, "delivery_bar": 15},
+    "parameters": {"gears.eccentricity_m": {"min": 3.3e-3, "max": 3.7e-3},
+                   "gears.lobe_radius_m": {"min": 8.5e-3, "max": 9.5e-3}},
+    "design": "lhs",
+    "seed": 7,
+}
+
+
+def _workers(text: str) -> list[int]:
+    try:
+        vals = [int(v) for v in str(text).split(",")]
+    except ValueError:
+        raise InputError("--sweep-workers", text, "comma-separated integers in [1, 512]") from None
+    if not vals or any(not 1 <= v <= 512 for v in vals):
+        raise InputError("--sweep-workers", text, "comma-separated integers in [1, 512]")
+    return vals
+
+
+def bench_sweep(points: int = 8, workers=(1, 2), scheduler: str | None = None, stream=sys.stdout) -> list[dict]:
+    """Run the bench study once per worker count; return one row per run (points/s, speed-up)."""
+    from .sweep import run_sweep
+    from .sweep_spec import parse_spec
+    if not 2 <= points <= 100_000:
+        raise InputError("--sweep-points", points, "an integer in [2, 100000]")
+    spec = parse_spec({**BENCH_SPEC, "samples": points})
+    rows = []
+    old = os.environ.get("XDG_CACHE_HOME")
+    try:
+        for n in ([None] if scheduler else workers):
+            with tempfile.TemporaryDirectory(prefix="gerotor_bench_sweep_") as tmp:
+                os.environ["XDG_CACHE_HOME"] = str(Path(tmp) / "cache")    # cold table cache per run
+                t0 = time.perf_counter()
+                res = run_sweep(spec, Path(tmp) / "results", scheduler=scheduler, workers=n, progress=None)
+                wall = time.perf_counter() - t0
+                recs = [json.loads(x) for x in (Path(tmp) / "results" / "points.jsonl").read_text().splitlines()]
+            cpu = sum(r["compute_s"] or 0.0 for r in recs) / max(1, len(recs))
+            row = {"workers": res["workers"], "points": res["points"], "failed": res["failed"], "wall_s": wall,
+                   "points_per_s": res["points"] / wall, "mean_point_s": cpu}
+            row["speedup"] = row["points_per_s"] / rows[0]["points_per_s"] if rows else 1.0
+            rows.append(row)
+            print(f"  {row['workers']:3d} worker(s): {row['points']} points in {wall:6.1f} s = "
+                  f"{row['points_per_s']:6.2f} points/s (speed-up {row['speedup']:.2f}; {cpu:.2f} s per point "
+                  f"inside a task; {row['failed']} failed)", file=stream, flush=True)
+    finally:
+        if old is None:
+            os.environ.pop("XDG_CACHE_HOME", None)
+        else:
+            os.environ["XDG_CACHE_HOME"] = old
+    return rows
+
+
+def add_to_bench(subparsers) -> None:
+    """Teach the existing ``bench`` sub-command the choice ``sweep``."""
+    bench = subparsers.choices.get("bench")
+    if bench is None:
+        return
+    for action in bench._actions:                                    # noqa: SLF001 - extend choices
+        if action.dest == "what" and action.choices is not None:
+            action.choices = tuple(action.choices) + ("sweep",)
+    bench.add_argument("--sweep-points", type=int, default=8, help="bench sweep: points per run (default 8)")
+    bench.add_argument("--sweep-workers", default="1,2", help="bench sweep: worker counts to time (default 1,2)")
+    bench.add_argument("--sweep-scheduler", help="bench sweep: time a running Dask cluster instead (tcp://host:8786)")
+    previous = bench.get_default("func")
+
+    def dispatch(args):
+        if args.what != "sweep":
+            return previous(args)
+        print(f"bench sweep: {BENCH_SPEC['title']}, {args.sweep_points} points per run, cold table cache; "
+              f"{os.cpu_count()} cores here")
+        rows = bench_sweep(args.sweep_points, _workers(args.sweep_workers), args.sweep_scheduler)
+        if args.json:
+            Path(args.json).write_text(json.dumps({"sweep": rows}, indent=2))
+            print(f"wrote {args.json}")
+        return 0
+
+    bench.set_defaults(func=dispatch)
