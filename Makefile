@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
 
-.PHONY: demo demo-model test test-fast setup clean chromium
+.PHONY: demo demo-model demo-sweep test test-fast setup clean chromium
 
 setup: $(STAMP)
 
@@ -26,6 +26,11 @@ demo: $(STAMP)
 # the model alone: efficiency table and plots (the former `make demo`)
 demo-model: $(STAMP)
 	$(VENV)/bin/gerotor-twin demo --out out/demo-model
+
+# a small design study on the embedded Dask cluster (all cores): writes out/demo-sweep/summary.html, opens nothing
+demo-sweep: $(STAMP)
+	rm -rf out/demo-sweep
+	$(VENV)/bin/gerotor-twin sweep config/sweep_demo.yaml -o out/demo-sweep
 
 test: $(STAMP) chromium
 	$(PY) -m pytest -q test

@@ -70,7 +70,7 @@ def reference():
      "parameters.fluid.viscosity_pa_s.max = 0.01 is invalid; allowed: > min = 0.05"),
     ({"outputs": ["efficiency"]}, "outputs = 'efficiency' is invalid; allowed: volumetric_efficiency"),
     ({"revolutions": 0}, "revolutions = 0 is invalid; allowed: an integer in [1, 1000]"),
-    ({"operating": {"rpm": 100}}, "operating.rpm = 'rpm' is invalid"),
+    ({"operating": {"rpm": 100}}, "operating.rpm = 100 is invalid; allowed: a field of operating: speed_rpm"),
     ({"set": {"numerics.table_points": 100}}, "set.numerics.table_points = 100 is invalid; allowed: integer in"),
     ({"parameterz": {}}, "parameterz = {} is invalid; allowed: one of the keys"),
 ])

@@ -54,7 +54,7 @@ def _in_process(body: dict) -> dict:
 def cluster(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cluster")
     cache = tmp / "cache"
-    with loopback_cluster(tmp, 2, env={"XDG_CACHE_HOME": str(cache)}) as (address, workers):
+    with loopback_cluster(tmp, 2, env={"GEROTOR_TWIN_CACHE": str(cache)}) as (address, workers):
         yield address, workers, cache
 
 
@@ -121,5 +121,5 @@ def test_a_worker_killed_mid_run_loses_no_point_and_duplicates_none(tmp_path, cl
     assert all(r["status"] == "ok" for r in recs), [r["reason"] for r in recs]
     lost = [k.rsplit("-", 1)[1] for k in keys]
     assert lost and all(next(r for r in recs if r["id"] == i)["worker"] != killed for i in lost)
-    monkeypatch.setenv("XDG_CACHE_HOME", str(cache))      # the workers' tables (bit-identical when reloaded)
+    monkeypatch.setenv("GEROTOR_TWIN_CACHE", str(cache))  # the workers' tables (bit-identical when reloaded)
     assert {r["id"]: {k: r[k] for k in COMPARED} for r in recs} == _in_process(KILL_STUDY)

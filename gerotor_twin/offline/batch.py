@@ -29,7 +29,7 @@ from typing import IO
 
 from ..errors import InputError
 from ..model.pump import BEARING_MODELS
-from .engine import Progress, check_engine_args, dask_client, run_tasks
+from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, run_tasks
 from .results_store import ResultStore
 
 __all__ = ["find_bags", "run_batch", "add_parser", "CSV_COLUMNS"]
@@ -158,9 +158,7 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="fleet output directory (rerun to add new recordings)")
     p.add_argument("--model", default="mobility", help="outer-gear model: " + " | ".join(BEARING_MODELS))
     p.add_argument("--config", help="pump YAML (default config/pump.yaml)")
-    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (default: embedded cluster)")
-    p.add_argument("--workers", type=int, help="worker processes of the embedded cluster (default: all cores)")
+    add_engine_arguments(p)
     p.add_argument("--calibrate", action="store_true",
                    help="also calibrate per recording (not available in this build: needs the calibrate command)")
-    p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_batch)

@@ -28,7 +28,7 @@ from typing import IO, Callable, Iterable
 from ..errors import InputError, one_line
 from .results_store import ResultStore
 
-__all__ = ["dask_client", "run_tasks", "Progress", "check_address", "check_engine_args"]
+__all__ = ["dask_client", "run_tasks", "Progress", "check_address", "check_engine_args", "add_engine_arguments"]
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ws|wss)://[^\s/]+$")
 
@@ -45,6 +45,13 @@ def _cluster_workers(workers: int | None) -> int:
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 512:
         raise InputError("--workers", workers, "an integer in [1, 512]")
     return n
+
+
+def add_engine_arguments(parser) -> None:
+    """``--scheduler``, ``--workers`` and ``--quiet`` of the commands that run on this engine."""
+    parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (default: embedded cluster)")
+    parser.add_argument("--workers", type=int, help="worker processes of the embedded cluster (default: all cores)")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
 
 
 def check_engine_args(scheduler: str | None, workers: int | None) -> None:

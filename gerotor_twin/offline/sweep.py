@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import IO
 
 from ..errors import InputError
-from .engine import Progress, check_engine_args, dask_client, run_tasks
+from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, run_tasks
 from .results_store import ResultStore
 from .sweep_point import evaluate_point
 from .sweep_spec import SweepSpec, load_spec
@@ -99,6 +99,12 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
         Continue the study already in ``out``.
     progress : text stream or None
         Progress line with ETA.
+
+    Returns
+    -------
+    dict
+        ``points``, ``ok``, ``failed``, ``computed`` (this run), ``kept`` (from before), ``wall_s``
+        (all of it [s]), ``run_s`` (from the first task submitted to the last result [s]), ``workers``.
     """
     out = Path(out)
     check_engine_args(scheduler, workers)
@@ -111,10 +117,12 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
         if len(store) < len(points):
             with dask_client(scheduler, workers) as client:
                 n_workers = len(client.scheduler_info()["workers"])
+                t_run = time.monotonic()
                 run_tasks(client, evaluate_point, spec.task(), points, store, key_prefix=f"sweep-{spec.digest()[:12]}",
                           progress=bar, failure=_failure)
+                run_s = time.monotonic() - t_run
         else:
-            n_workers = 0
+            n_workers, run_s = 0, 0.0
         bar.close()
         records = sorted(store.records.values(), key=lambda r: r["index"])
     wall = time.monotonic() - t0
@@ -125,7 +133,7 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
             + (f"; {kept} kept from before (--resume)" if kept else "")]
     write_outputs(spec, out, records, info)
     return {"points": len(points), "ok": ok, "failed": len(records) - ok, "computed": len(records) - kept,
-            "kept": kept, "wall_s": wall, "workers": n_workers}
+            "kept": kept, "wall_s": wall, "run_s": run_s, "workers": n_workers}
 
 
 def cmd_sweep(args) -> int:
@@ -147,10 +155,8 @@ def add_parser(sub) -> None:
                                    "and an HTML summary. See docs/sweep.md.")
     p.add_argument("spec", help="SPEC YAML file")
     p.add_argument("-o", "--output", required=True, help="RESULTS directory")
-    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (default: embedded cluster)")
-    p.add_argument("--workers", type=int, help="worker processes of the embedded cluster (default: all cores)")
+    add_engine_arguments(p)
     p.add_argument("--resume", action="store_true", help="continue the study in RESULTS (same SPEC)")
-    p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_sweep)
     from .sweep_bench import add_to_bench
     add_to_bench(sub)

@@ -38,6 +38,23 @@ def numeric_params(records: list[dict], names: list[str]) -> list[str]:
                                       if n in _OPERATING_FIRST else 0))
 
 
+def slice_at_middle(ok: list[dict], keep: list[str], names: list[str], least: int = 4) -> tuple[list[dict], str]:
+    """The points where every varying parameter not in ``keep`` is at its middle value (a grid slice).
+
+    Returns the points and a text naming the slice; all points (and "") when the slice would hold
+    fewer than ``least`` points (a Latin hypercube or Sobol' sample has no slices).
+    """
+    fixed = {}
+    for n in names:
+        vals = sorted({r["params"][n] for r in ok}, key=lambda v: (isinstance(v, str), v))
+        if n not in keep and len(vals) > 1:
+            fixed[n] = vals[(len(vals) - 1) // 2]
+    sel = [r for r in ok if all(r["params"][n] == v for n, v in fixed.items())]
+    if not fixed or len(sel) < least:
+        return ok, ""
+    return sel, "; at " + ", ".join(f"{n} = {v}" for n, v in fixed.items())
+
+
 def _col(records, name) -> np.ndarray:
     return np.array([r["params"][name] if name in r["params"] else r["outputs"].get(name, np.nan)
                      for r in records], dtype=float)
@@ -128,13 +145,18 @@ def sweep_page(title: str, records: list[dict], params: list[str], outputs: list
     num = numeric_params(ok, params) if ok else []
     figs = []
     if len(num) >= 2:
-        figs.append(("Volumetric efficiency map", figure(fig_efficiency_map(ok, num[0], num[1]), "fig-eta-map",
-                     f"Volumetric efficiency [%] over {num[0]} and {num[1]} (other parameters mixed in).")))
+        sel, where = slice_at_middle(ok, num[:2], params)
+        figs.append(("Volumetric efficiency map", figure(fig_efficiency_map(sel, num[0], num[1]), "fig-eta-map",
+                     f"Volumetric efficiency [%] over {num[0]} and {num[1]}{where or ' (all points)'}.")))
     if num:
         x = num[1] if num[0] == "operating.delivery_bar" and len(num) > 1 else num[0]
-        others = [p for p in params if p != x and len({r["params"][p] for r in ok}) > 1]
-        figs.append(("Delivery-flow ripple", figure(fig_ripple(ok, x, others[0] if others else None), "fig-ripple",
-                     f"Delivery-flow ripple [%] against {x}.")))
+        others = [p for p in params if p != x and p != "operating.delivery_bar"
+                  and len({r["params"][p] for r in ok}) > 1]
+        others += ["operating.delivery_bar"] if "operating.delivery_bar" in num and x != "operating.delivery_bar" else []
+        group = others[0] if others else None
+        sel, where = slice_at_middle(ok, [x] + ([group] if group else []), params, least=2)
+        figs.append(("Delivery-flow ripple", figure(fig_ripple(sel, x, group), "fig-ripple",
+                     f"Delivery-flow ripple [%] against {x}{where or ' (all points)'}.")))
     if len(params) >= 2 and num and len(ok) >= 2:
         figs.append(("Parallel coordinates", figure(fig_parallel(ok, num, list(outputs)[:6]),
                      "fig-parallel", "Every point through its parameters and outputs (normalised per axis).")))

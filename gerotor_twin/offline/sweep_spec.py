@@ -226,7 +226,8 @@ def _check_operating(name: str, values: list, cfg, where: str) -> None:
               "suction_bar_abs": (0.1, 5.0, False, "[0.1, 5] bar absolute"),
               "oil_temperature_c": (-40.0, 200.0, False, "[-40, 200] degC")}
     if name not in limits:
-        raise InputError(where, name, "operating." + " | operating.".join(OPERATING_FIELDS), "unknown field")
+        raise InputError(where, values[0] if values else None,
+                         "a field of operating: " + " | ".join(OPERATING_FIELDS), "unknown field")
     lo, hi, lo_open, allowed = limits[name]
     for v in values:
         if v is None and name in ("suction_bar_abs", "oil_temperature_c"):
