@@ -29,7 +29,7 @@ from typing import IO
 
 from ..errors import InputError
 from ..model.pump import BEARING_MODELS
-from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, run_tasks
+from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, discarded_if_unused, run_tasks
 from .results_store import ResultStore
 
 __all__ = ["find_bags", "run_batch", "add_parser", "CSV_COLUMNS"]
@@ -113,21 +113,23 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
         load_config(config)                       # a bad config is one error here, not one per bag
     items = [_item(b) for b in find_bags(pattern)]
     out = Path(out)
-    _prepare(out, model, config)
-    settings = {"out": str(out.resolve()), "model": model, "config": str(Path(config).resolve()) if config else None}
-    t0 = time.monotonic()
-    with ResultStore(out / "bags.jsonl") as store:
-        kept = sum(it["id"] in store for it in items)
-        bar = Progress("batch", len(items), done=kept, unit="recordings", stream=progress)
-        n_workers = 0
-        if kept < len(items):
-            from .batch_bag import process_bag
-            with dask_client(scheduler, workers) as client:
-                n_workers = len(client.scheduler_info()["workers"])
-                run_tasks(client, process_bag, settings, items, store, key_prefix="batch", progress=bar,
-                          failure=_failure)
-        bar.close()
-        rows = sorted((store.records[it["id"]] for it in items if it["id"] in store), key=lambda r: r["name"])
+    with discarded_if_unused(out, ("manifest.json", "bags.jsonl"), "bags.jsonl"):
+        _prepare(out, model, config)
+        settings = {"out": str(out.resolve()), "model": model,
+                    "config": str(Path(config).resolve()) if config else None}
+        t0 = time.monotonic()
+        with ResultStore(out / "bags.jsonl") as store:
+            kept = sum(it["id"] in store for it in items)
+            bar = Progress("batch", len(items), done=kept, unit="recordings", stream=progress)
+            n_workers = 0
+            if kept < len(items):
+                from .batch_bag import process_bag
+                with dask_client(scheduler, workers) as client:
+                    n_workers = len(client.scheduler_info()["workers"])
+                    run_tasks(client, process_bag, settings, items, store, key_prefix="batch", progress=bar,
+                              failure=_failure)
+            bar.close()
+            rows = sorted((store.records[it["id"]] for it in items if it["id"] in store), key=lambda r: r["name"])
     ok = sum(r["status"] == "ok" for r in rows)
     wall = time.monotonic() - t0
     info = [f"{len(rows)} recordings ({pattern}): {ok} reported, {len(rows) - ok} failed; model {model}, "

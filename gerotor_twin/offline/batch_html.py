@@ -70,8 +70,10 @@ def _row(out: Path, r: dict) -> str:
 def fleet_page(out: Path, rows: list[dict], info: list[str]) -> str:
     """The HTML page (self-contained; links to the per-recording reports are relative to ``out``)."""
     ok = [r for r in rows if r["status"] == "ok"]
-    fig = figure(fig_errors(ok), "fig-fleet-errors", "Mean-flow error (bias, RMSE) and volumetric-efficiency "
-                 "bias per recording, over its steady plateaus.") if ok else "<p class='warn'>No recording reported.</p>"
+    fig = "<p class='warn'>No recording reported.</p>"
+    if ok:
+        fig = figure(fig_errors(ok), "fig-fleet-errors", "Mean-flow error (bias, RMSE) and volumetric-efficiency "
+                     "bias per recording, over its steady plateaus.")
     head = ("<tr><th class='l'>recording</th><th class='l'>status</th><th class='l'>date (UTC)</th>"
             "<th>duration [s]</th><th>speed [rpm]</th><th>delivery [bar g]</th><th>plateaus</th>"
             "<th>flow bias / RMSE [L/min]</th><th>η<sub>v</sub> bias / RMSE [%-pt]</th>"

@@ -28,7 +28,8 @@ from typing import IO, Callable, Iterable
 from ..errors import InputError, one_line
 from .results_store import ResultStore
 
-__all__ = ["dask_client", "run_tasks", "Progress", "check_address", "check_engine_args", "add_engine_arguments"]
+__all__ = ["dask_client", "run_tasks", "Progress", "check_address", "check_engine_args", "add_engine_arguments",
+           "discarded_if_unused"]
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ws|wss)://[^\s/]+$")
 
@@ -62,6 +63,28 @@ def check_engine_args(scheduler: str | None, workers: int | None) -> None:
             raise InputError("--workers", workers, "absent with --scheduler (the cluster has its own workers)")
     else:
         _cluster_workers(workers)
+
+
+@contextmanager
+def discarded_if_unused(out, names: tuple[str, ...], store_name: str):
+    """Remove ``names`` from a directory this run created when it fails before storing any result.
+
+    A run that cannot reach its scheduler leaves nothing behind (so the same command can simply
+    be repeated); a run that stored results keeps them (``--resume``/rerun continues).
+    """
+    from pathlib import Path
+    out = Path(out)
+    fresh = not out.exists()
+    try:
+        yield
+    except InputError:
+        store = out / store_name
+        if fresh and (not store.exists() or store.stat().st_size == 0):
+            for name in names:
+                (out / name).unlink(missing_ok=True)
+            if out.is_dir() and not any(out.iterdir()):
+                out.rmdir()
+        raise
 
 
 @contextmanager

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import IO
 
 from ..errors import InputError
-from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, run_tasks
+from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, discarded_if_unused, run_tasks
 from .results_store import ResultStore
 from .sweep_point import evaluate_point
 from .sweep_spec import SweepSpec, load_spec
@@ -108,23 +108,24 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
     """
     out = Path(out)
     check_engine_args(scheduler, workers)
-    _prepare(spec, out, resume)
-    points = spec.points()
-    t0 = time.monotonic()
-    with ResultStore(out / "points.jsonl") as store:
-        kept = len(store)
-        bar = Progress("sweep", len(points), done=sum(p["id"] in store for p in points), stream=progress)
-        if len(store) < len(points):
-            with dask_client(scheduler, workers) as client:
-                n_workers = len(client.scheduler_info()["workers"])
-                t_run = time.monotonic()
-                run_tasks(client, evaluate_point, spec.task(), points, store, key_prefix=f"sweep-{spec.digest()[:12]}",
-                          progress=bar, failure=_failure)
-                run_s = time.monotonic() - t_run
-        else:
-            n_workers, run_s = 0, 0.0
-        bar.close()
-        records = sorted(store.records.values(), key=lambda r: r["index"])
+    with discarded_if_unused(out, RESULT_FILES, "points.jsonl"):
+        _prepare(spec, out, resume)
+        points = spec.points()
+        t0 = time.monotonic()
+        with ResultStore(out / "points.jsonl") as store:
+            kept = len(store)
+            bar = Progress("sweep", len(points), done=sum(p["id"] in store for p in points), stream=progress)
+            if len(store) < len(points):
+                with dask_client(scheduler, workers) as client:
+                    n_workers = len(client.scheduler_info()["workers"])
+                    t_run = time.monotonic()
+                    run_tasks(client, evaluate_point, spec.task(), points, store, progress=bar, failure=_failure,
+                              key_prefix=f"sweep-{spec.digest()[:12]}")
+                    run_s = time.monotonic() - t_run
+            else:
+                n_workers, run_s = 0, 0.0
+            bar.close()
+            records = sorted(store.records.values(), key=lambda r: r["index"])
     wall = time.monotonic() - t0
     ok = sum(r["status"] == "ok" for r in records)
     info = [f"{len(records)} of {len(points)} points: {ok} computed, {len(records) - ok} failed "

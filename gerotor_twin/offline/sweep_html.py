@@ -152,7 +152,8 @@ def sweep_page(title: str, records: list[dict], params: list[str], outputs: list
         x = num[1] if num[0] == "operating.delivery_bar" and len(num) > 1 else num[0]
         others = [p for p in params if p != x and p != "operating.delivery_bar"
                   and len({r["params"][p] for r in ok}) > 1]
-        others += ["operating.delivery_bar"] if "operating.delivery_bar" in num and x != "operating.delivery_bar" else []
+        if "operating.delivery_bar" in num and x != "operating.delivery_bar":
+            others.append("operating.delivery_bar")
         group = others[0] if others else None
         sel, where = slice_at_middle(ok, [x] + ([group] if group else []), params, least=2)
         figs.append(("Delivery-flow ripple", figure(fig_ripple(sel, x, group), "fig-ripple",

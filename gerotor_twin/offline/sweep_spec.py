@@ -193,7 +193,8 @@ def _range_axis(name: str, spec: dict, design: str) -> Axis:
 
 def _axis(name, spec, design: str) -> Axis:
     if not isinstance(name, str) or not name:
-        raise InputError("parameters", name, "parameter names: bearing_model, operating.<field> or a dotted config path")
+        raise InputError("parameters", name,
+                         "parameter names: bearing_model, operating.<field> or a dotted config path")
     if isinstance(spec, dict):
         return _range_axis(name, spec, design)
     if not isinstance(spec, list) or not spec:
