@@ -57,7 +57,16 @@ def _prepare(spec: SweepSpec, out: Path, resume: bool) -> None:
         "spec_digest": digest, "spec": spec.source, "title": spec.title, "base_config": spec.base_source,
         "design": spec.design, "points": len(spec.points()), "parameters": [a.name for a in spec.axes],
         "outputs": list(spec.outputs), "model": spec.model, "revolutions": spec.revolutions,
+        "operating": spec.operating, "set": spec.set,
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}, indent=2))
+
+
+def _held(spec: SweepSpec) -> str:
+    """The operating point and ``set`` fields held for the whole study, as text."""
+    varied = set(_param_names(spec))
+    held = {f"operating.{k}": v for k, v in spec.operating.items() if v is not None and f"operating.{k}" not in varied}
+    held.update({k: v for k, v in spec.set.items() if k not in varied})
+    return "held: " + ", ".join(f"{k} = {v}" for k, v in held.items())
 
 
 def _param_names(spec: SweepSpec) -> list[str]:
@@ -130,6 +139,7 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
     ok = sum(r["status"] == "ok" for r in records)
     info = [f"{len(records)} of {len(points)} points: {ok} computed, {len(records) - ok} failed "
             f"({spec.design} design, model {spec.model}, base {spec.base_source})",
+            _held(spec),
             f"{len(records) - kept} points this run in {wall:.1f} s on {n_workers} worker(s)"
             + (f"; {kept} kept from before (--resume)" if kept else "")]
     write_outputs(spec, out, records, info)

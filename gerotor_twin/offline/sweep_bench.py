@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
+from .engine import warm_up_kernels
 
 __all__ = ["bench_sweep", "add_to_bench"]
 
@@ -53,15 +54,6 @@ def _workers(text: str) -> list[int]:
     return vals
 
 
-def _warm_up() -> None:
-    """Compile (or load) the numba kernels here once, so that no timed run pays the compilation."""
-    from ..config import load_config
-    from ..model.pump import PumpModel
-    from ..model.steady import run_steady
-    for model in ("fixed", "mobility"):
-        run_steady(PumpModel(load_config(), model), 2000, 10, max_revolutions=1, min_revolutions=1)
-
-
 def bench_sweep(points: int = 8, workers=(1, 2), scheduler: str | None = None, kind: str = "geometry",
                 stream=sys.stdout) -> list[dict]:
     """Run the bench study once per worker count; return one row per run (points/s, speed-up)."""
@@ -72,7 +64,7 @@ def bench_sweep(points: int = 8, workers=(1, 2), scheduler: str | None = None, k
     if kind not in BENCH_SPECS:
         raise InputError("--sweep-kind", kind, " | ".join(BENCH_SPECS))
     spec = parse_spec({**BENCH_SPECS[kind], "samples": points})
-    _warm_up()
+    warm_up_kernels()
     rows = []
     old = os.environ.get("GEROTOR_TWIN_CACHE")
     try:
