@@ -186,8 +186,8 @@ def _range_axis(name: str, spec: dict, design: str) -> Axis:
             raise InputError(f"{fld}", spec, "a list, or min/max with num or step (design: grid); "
                              "min/max alone needs design: lhs | sobol")
         return Axis(name, lo=float(lo), hi=float(hi), log=log, integer=integer)
-    vals = tuple(int(round(x)) for x in v) if integer and isinstance(spec.get("step", 1), int) else \
-        tuple(float(x) for x in v)
+    whole = integer and bool(np.all(v == np.round(v)))      # integer bounds and integral spacing: ints
+    vals = tuple(int(round(x)) for x in v) if whole else tuple(float(x) for x in v)
     return Axis(name, values=vals)
 
 
