@@ -78,6 +78,26 @@ def test_cluster_gives_the_in_process_results_bit_for_bit(tmp_path, cluster):
     assert {r["worker"] for r in recs if r["status"] == "ok"} <= set(_worker_addresses(address))
 
 
+def test_cheap_points_share_tasks_with_the_same_results(tmp_path, cluster):
+    """Behaviour: 32 operating points on 2 workers go 2 per task (chunk_size); every point once, equal to
+    in-process bit-for-bit."""
+    from gerotor_twin.offline.engine import chunk_size
+    body = {"title": "operating map", "model": "fixed", "revolutions": 6, "set": TINY["set"],
+            "parameters": {"operating.speed_rpm": [600, 1000, 1400, 1800, 2200, 2600, 2800, 3000],
+                           "operating.delivery_bar": [2, 9, 16, 23]}}
+    assert chunk_size(32, 2) == 2 and chunk_size(15, 2) == 1 and chunk_size(10**6, 2) == 32
+    address, _, _ = cluster
+    proc = _sweep(_write(tmp_path / "op.yaml", body), tmp_path / "r", address, "--quiet")
+    try:
+        _, err = proc.communicate(timeout=120)
+    finally:
+        stop(proc)
+    assert proc.returncode == 0, err
+    recs = _lines(tmp_path / "r" / "points.jsonl")
+    assert sorted(r["id"] for r in recs) == [f"p{i:06d}" for i in range(32)]
+    assert {r["id"]: {k: r[k] for k in COMPARED} for r in recs} == _in_process(body)
+
+
 def _worker_addresses(address: str) -> dict:
     from distributed import Client
     with Client(address, timeout=10) as c:

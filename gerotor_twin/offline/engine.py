@@ -28,8 +28,8 @@ from typing import IO, Callable, Iterable
 from ..errors import InputError, one_line
 from .results_store import ResultStore
 
-__all__ = ["dask_client", "run_tasks", "Progress", "check_address", "check_engine_args", "add_engine_arguments",
-           "discarded_if_unused", "warm_up_kernels"]
+__all__ = ["dask_client", "run_tasks", "chunk_size", "Progress", "check_address", "check_engine_args",
+           "add_engine_arguments", "discarded_if_unused", "warm_up_kernels"]
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ws|wss)://[^\s/]+$")
 
@@ -175,30 +175,57 @@ class Progress:
             print("\r" + self.line() + "  ", file=self.stream, flush=True)
 
 
+def chunk_size(n_items: int, n_workers: int, limit: int = 32) -> int:
+    """Items per task: as many as keep at least 8 tasks per worker (load balance), at most ``limit``.
+
+    Cheap items (an operating point, ~0.05 s) then share one task's ~6 ms of engine overhead; a
+    small study or a large cluster keeps one item per task.
+    """
+    return max(1, min(limit, n_items // (8 * max(1, n_workers))))
+
+
+def _run_chunk(func: Callable, shared, items: list[dict]) -> list[dict]:
+    """Several items in one task, one record each."""
+    return [func(shared, it) for it in items]
+
+
 def run_tasks(client, func: Callable, shared, items: Iterable[dict], store: ResultStore, *, key_prefix: str,
-              progress: Progress | None = None, failure: Callable[[dict, str], dict] | None = None) -> int:
+              progress: Progress | None = None, failure: Callable[[dict, str], dict] | None = None,
+              chunk: int = 1) -> int:
     """Run ``func(shared, item)`` for every item whose ``id`` is not in ``store``; return how many were added.
 
     ``shared`` (small: settings, the raw config) goes with every task, so no task depends on data
-    held by one worker.
-    A task that raises (or whose worker died too often) becomes ``failure(item, reason)`` (default:
-    ``{"id", "status": "failed", "reason"}``).
+    held by one worker.  ``chunk`` items go in one task (key ``<key_prefix>-<id>`` for one,
+    ``<key_prefix>-<first id>..<last id>`` for several); each record is stored as its task
+    returns.  A task that raises (or whose worker died too often) makes each of its items
+    ``failure(item, reason)`` (default: ``{"id", "status": "failed", "reason"}``).
     """
     from distributed import as_completed
     todo = [it for it in items if it["id"] not in store]
     if not todo:
         return 0
-    futures = {client.submit(func, shared, it, key=f"{key_prefix}-{it['id']}", pure=False): it for it in todo}
+    groups = [todo[i:i + max(1, chunk)] for i in range(0, len(todo), max(1, chunk))]
+    futures = {}
+    for g in groups:
+        if len(g) == 1:
+            fut = client.submit(func, shared, g[0], key=f"{key_prefix}-{g[0]['id']}", pure=False)
+        else:
+            fut = client.submit(_run_chunk, func, shared, g, key=f"{key_prefix}-{g[0]['id']}..{g[-1]['id']}",
+                                pure=False)
+        futures[fut] = g
     added = 0
     for fut in as_completed(futures):
-        it = futures.pop(fut)
+        group = futures.pop(fut)
         try:
-            rec = fut.result()
+            recs = fut.result()
+            recs = [recs] if len(group) == 1 else recs
         except Exception as exc:  # noqa: BLE001 - KilledWorker, an error inside the task: record it, go on
             reason = f"{type(exc).__name__}: {one_line(exc, 300)}"
-            rec = failure(it, reason) if failure else {"id": it["id"], "status": "failed", "reason": reason}
-        added += store.add(rec)
-        if progress is not None:
-            progress.update(failed=rec.get("status") != "ok")
+            recs = [failure(it, reason) if failure else {"id": it["id"], "status": "failed", "reason": reason}
+                    for it in group]
+        for rec in recs:
+            added += store.add(rec)
+            if progress is not None:
+                progress.update(failed=rec.get("status") != "ok")
         fut.release()
     return added

@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import IO
 
 from ..errors import InputError
-from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, discarded_if_unused, run_tasks
+from .engine import (Progress, add_engine_arguments, check_engine_args, chunk_size, dask_client, discarded_if_unused,
+                     run_tasks)
 from .results_store import ResultStore
 from .sweep_point import evaluate_point
 from .sweep_spec import SweepSpec, load_spec
@@ -128,8 +129,9 @@ def run_sweep(spec: SweepSpec, out, *, scheduler: str | None = None, workers: in
                 with dask_client(scheduler, workers) as client:
                     n_workers = len(client.scheduler_info()["workers"])
                     t_run = time.monotonic()
+                    todo = sum(p["id"] not in store for p in points)
                     run_tasks(client, evaluate_point, spec.task(), points, store, progress=bar, failure=_failure,
-                              key_prefix=f"sweep-{spec.digest()[:12]}")
+                              key_prefix=f"sweep-{spec.digest()[:12]}", chunk=chunk_size(todo, n_workers))
                     run_s = time.monotonic() - t_run
             else:
                 n_workers, run_s = 0, 0.0
