@@ -216,6 +216,8 @@ _COMMAND_MODULES = (
     "gerotor_twin.ros.replay",                    # replay (imports rclpy only when run)
     "gerotor_twin.ros.cli_commands",              # node; teaches `bench` the choice `node`
     "gerotor_twin.io.cli_commands",               # log recover
+    "gerotor_twin.offline.sweep",                 # sweep; teaches `bench` the choice `sweep`
+    "gerotor_twin.offline.batch",                 # batch
 )
 
 
