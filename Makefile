@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
 
-.PHONY: demo demo-model test test-fast setup clean chromium
+.PHONY: demo demo-model demo-calibrate demo-sweep test test-fast setup clean chromium
 
 setup: $(STAMP)
 
@@ -26,6 +26,19 @@ demo: $(STAMP)
 # the model alone: efficiency table and plots (the former `make demo`)
 demo-model: $(STAMP)
 	$(VENV)/bin/gerotor-twin demo --out out/demo-model
+
+# calibration from the bundled map bag, then the health monitor over the wear bag (about 1 min)
+demo-calibrate: $(STAMP)
+	$(VENV)/bin/gerotor-twin calibrate --bench bags/bench_map.mcap -o out/demo-calibrate/pump_fitted.yaml \
+	    --json out/demo-calibrate/fit.json --report out/demo-calibrate/fit.html --overwrite
+	$(VENV)/bin/gerotor-twin run-bag bags/bench_wear.mcap -o out/demo-calibrate/wear_twin.mcap \
+	    --config out/demo-calibrate/pump_fitted.yaml --overwrite --quiet
+	$(VENV)/bin/gerotor-twin health out/demo-calibrate/wear_twin.mcap --every 4
+
+# a small design study on the embedded Dask cluster (all cores): writes out/demo-sweep/summary.html, opens nothing
+demo-sweep: $(STAMP)
+	rm -rf out/demo-sweep
+	$(VENV)/bin/gerotor-twin sweep config/sweep_demo.yaml -o out/demo-sweep
 
 test: $(STAMP) chromium
 	$(PY) -m pytest -q test

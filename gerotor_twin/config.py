@@ -7,7 +7,7 @@ naming the dotted field, the value and the allowed range.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -198,6 +198,7 @@ class PumpConfig:
         """The fluid at oil temperature T [K] (the reference temperature for None; constant without oil)."""
         t_ref = self.reference_temperature_k
         return fluid_at(self.fluid, self.oil, t_ref, t_ref if t_k is None else t_k)
+    calibration: dict | None = field(default=None, compare=False, hash=False)  #: provenance of a fitted config (``gerotor-twin calibrate``), kept as written
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -220,6 +221,7 @@ class PumpConfig:
             "range": _asdict(self.range),
             "numerics": _asdict(self.numerics),
             "micro_motion": _asdict(self.micro_motion),
+            **({"calibration": self.calibration} if self.calibration is not None else {}),
         }
 
 
@@ -242,7 +244,7 @@ def _oil_dict(cfg: PumpConfig) -> dict:
 
 
 _SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
-             "micro_motion", "oil", "mixture", "fluid_model"}
+             "micro_motion", "oil", "mixture", "fluid_model", "calibration"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -336,7 +338,8 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
                       boundary=boundary, range=rng, numerics=num, source=source, oil=oil,
                       reference_temperature_k=t_ref, fluid_model=parse_fluid_model(raw.get("fluid_model", "mixture")),
                       air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
-                      micro_motion=_micro_motion(raw))
+                      micro_motion=_micro_motion(raw),
+                      calibration=_calibration_block(raw.get("calibration")))
 
 
 def _micro_motion(raw: dict) -> MicroMotion:
@@ -352,6 +355,15 @@ def _fluid_and_oil(raw: dict) -> tuple[Fluid, OilProperties | None, float]:
     kwargs = {k: _num(fs, "fluid", k) for k in fs}
     oil, t_ref = (None, DEFAULT_REFERENCE_TEMPERATURE_K) if raw.get("oil") is None else parse_oil(raw["oil"])
     return fluid_with_oil(fs, kwargs, oil, t_ref), oil, t_ref
+
+
+def _calibration_block(sec) -> dict | None:
+    """The optional ``calibration`` provenance block: a mapping, kept as written (not used by the model)."""
+    if sec is None:
+        return None
+    if not isinstance(sec, dict):
+        raise InputError("calibration", sec, "a mapping (the provenance written by `gerotor-twin calibrate`)")
+    return sec
 
 
 def _check_ports(s: Port, d: Port) -> None:

@@ -17,6 +17,13 @@ from gerotor_twin.units import m3s_to_lpm
 __all__ = ["add_parser"]
 
 
+def _wear_args(spec) -> list[str]:
+    """The wear options of the command line stored in the file (none without wear)."""
+    if spec.wear_clearance_factor_end == 0:
+        return []
+    return ["--wear-to", f"{spec.wear_clearance_factor_end:g}", "--wear-start", f"{spec.wear_start_s:g}"]
+
+
 def cmd_synth_bench(args) -> int:
     from gerotor_twin.bench_emulator import BenchSpec, get_profile, synthesize
     from gerotor_twin.bench_emulator.emulator import default_output_name
@@ -24,7 +31,8 @@ def cmd_synth_bench(args) -> int:
     profile = get_profile(args.profile)
     spec = BenchSpec(seed=args.seed, bearing=args.bearing, clearance_factor=args.clearance_factor,
                      speed_rate_hz=args.speed_rate, pressure_rate_hz=args.pressure_rate,
-                     flow_rate_hz=args.flow_rate, temperature_rate_hz=args.temperature_rate)
+                     flow_rate_hz=args.flow_rate, temperature_rate_hz=args.temperature_rate,
+                     wear_clearance_factor_end=args.wear_to, wear_start_s=args.wear_start)
     out = Path(args.output) if args.output else default_output_name(profile)
     if out.exists() and not args.overwrite:
         raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
@@ -34,7 +42,7 @@ def cmd_synth_bench(args) -> int:
                           "--clearance-factor", f"{spec.clearance_factor:g}",
                           "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
                           "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
-                          f"{spec.temperature_rate_hz:g}"])
+                          f"{spec.temperature_rate_hz:g}"] + _wear_args(spec))
     config = None
     if args.config:
         from gerotor_twin.config import load_config
@@ -48,7 +56,8 @@ def cmd_synth_bench(args) -> int:
     for row in res["truth"]:
         print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar: mean flow "
               f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}, "
-              f"oil {row['oil_temperature_c']:.1f} °C")
+              f"oil {row['oil_temperature_c']:.1f} °C"
+              + (f", clearance factor {row['clearance_factor']:.4f}" if "clearance_factor" in row else ""))
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=2))
         print(f"wrote {args.json}")
@@ -60,7 +69,7 @@ def add_parser(sub) -> None:
                        description="Run the bench emulator (a pump that differs from the twin on purpose, "
                                    "seen through bench sensors) along a profile and record the bench "
                                    "topics to a rosbag2-convention MCAP file. Same seed -> same bytes.")
-    p.add_argument("--profile", default="transient", help="map | transient | test (default transient)")
+    p.add_argument("--profile", default="transient", help="map | transient | wear | test (default transient)")
     p.add_argument("-o", "--output", help="MCAP file (default bags/bench_<profile>.mcap)")
     p.add_argument("--seed", type=int, default=20240601, help="noise seed (default 20240601)")
     p.add_argument("--bearing", default="short", help="outer-gear model of the emulated pump (default short)")
@@ -70,6 +79,9 @@ def add_parser(sub) -> None:
     p.add_argument("--pressure-rate", type=float, default=100.0, help="pressure rate [Hz] (default 100)")
     p.add_argument("--flow-rate", type=float, default=20.0, help="flow meter rate [Hz] (default 20)")
     p.add_argument("--temperature-rate", type=float, default=5.0, help="thermometer rate [Hz] (default 5)")
+    p.add_argument("--wear-to", type=float, default=0.0,
+                   help="wear scenario: clearance factor reached at the end of the run (0 = no wear; default 0)")
+    p.add_argument("--wear-start", type=float, default=0.0, help="wear starts at this time of the run [s] (default 0)")
     p.add_argument("--config", help="nominal pump YAML the emulated pump derives from (default config/pump.yaml)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing file")
     p.add_argument("--json", metavar="F", help="write counts and the ground truth per plateau to F")

@@ -14,6 +14,9 @@ Built-in profiles (``gerotor-twin synth-bench --profile NAME``):
                ramps; 146 s
 ``transient``  1000 rpm / 10 bar, speed ramp to 2500 rpm in 5 s, delivery
                pressure steps 10 → 20 → 5 bar, speed ramp down to 1500 rpm; 26 s
+``wear``       durability cycle for the wear scenario: 1500 rpm / 20 bar (8 s), then
+               three times 2500 rpm / 10 bar and back (1 s ramps, 7 s holds), ending at
+               2000 rpm / 15 bar; 64 s (use with ``--wear-to``)
 ``test``       0.4 s at 1000 rpm with a pressure step (unit tests)
 =============  ==============================================================
 """
@@ -134,7 +137,16 @@ def _test_profile() -> Profile:
     return Profile("test", (Segment(0.2, 1000, 10), Segment(0.2, 1000, 15)), "unit-test profile")
 
 
-PROFILES = {"map": _map_profile, "transient": _transient_profile, "test": _test_profile}
+def _wear_profile() -> Profile:
+    segs = [Segment(8.0, 1500, 20)]
+    for _ in range(3):
+        segs += [Segment(1.0, 2500, 10, ramp=True), Segment(7.0, 2500, 10),
+                 Segment(1.0, 1500, 20, ramp=True), Segment(7.0, 1500, 20)]
+    segs += [Segment(1.0, 2000, 15, ramp=True), Segment(7.0, 2000, 15)]
+    return Profile("wear", tuple(segs), "durability cycle 1500/20 <-> 2500/10 (7 s holds, 1 s ramps), 64 s")
+
+
+PROFILES = {"map": _map_profile, "transient": _transient_profile, "wear": _wear_profile, "test": _test_profile}
 
 
 def get_profile(name: str) -> Profile:

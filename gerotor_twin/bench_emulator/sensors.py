@@ -60,6 +60,11 @@ class BenchSpec:
         Thermometer time constant [s] and noise [K].
     latency_s, latency_jitter_s : float
         Receive latency of the recorder (log time − stamp): fixed part and mean of an exponential [s].
+    wear_clearance_factor_end : float
+        Wear scenario: the clearance factor grows linearly from ``clearance_factor`` at
+        ``wear_start_s`` to this value at the end of the run [-] (0 = no wear).
+    wear_start_s : float
+        Start of the wear [s].
     warmup_s : float
         Simulated run-in at the first set-point before recording starts [s].
     start_time_ns : int
@@ -94,12 +99,18 @@ class BenchSpec:
     latency_s: float = 0.3e-3
     latency_jitter_s: float = 0.2e-3
     warmup_s: float = 0.3
+    wear_clearance_factor_end: float = 0.0
+    wear_start_s: float = 0.0
     start_time_ns: int = 1_735_689_600_000_000_000   # 2025-01-01T00:00:00Z
 
     def __post_init__(self):
         from gerotor_twin.errors import InputError
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed < 2**63:
             raise InputError("seed", self.seed, "an integer in [0, 2^63)")
+        if not (self.wear_clearance_factor_end == 0 or 0.5 <= self.wear_clearance_factor_end <= 2.0):
+            raise InputError("wear_clearance_factor_end", self.wear_clearance_factor_end, "0 (no wear) or [0.5, 2]")
+        if not (math.isfinite(self.wear_start_s) and self.wear_start_s >= 0):
+            raise InputError("wear_start_s", self.wear_start_s, "[0, inf) s")
 
     def decimation(self, rate_hz: float, field: str) -> int:
         """Ticks per published sample for a topic rate [Hz]; InputError if not a divisor."""

@@ -82,7 +82,7 @@ def _require_prediction(core: TwinCore, t_last: int, n_in: int, output) -> None:
 
 
 def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings: TwinSettings | None = None,
-            overwrite: bool = False, progress: IO[str] | None = sys.stderr) -> dict:
+            overwrite: bool = False, progress: IO[str] | None = sys.stderr, health=None) -> dict:
     """Run the twin core over a bench bag and write the node's topics to ``output``.
 
     Parameters
@@ -99,6 +99,8 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
         Core settings (default: the node's defaults with ``max_span_s = inf``).
     progress : text stream or None
         Progress bar with ETA (default stderr).
+    health : HealthSettings, optional
+        Health monitor settings (default: the node's defaults), :mod:`gerotor_twin.twin.health`.
 
     Returns
     -------
@@ -125,10 +127,11 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
     rows.sort(key=lambda r: r[0])
     cfg = load_config(config_path)
     settings = settings or TwinSettings(max_span_s=math.inf)
-    core = TwinCore(PumpModel(cfg, model), settings)
+    core = TwinCore(PumpModel(cfg, model), settings, health=health)
     cfg_text = Path(cfg.source).read_text() if Path(str(cfg.source)).is_file() else yaml.safe_dump(cfg.to_dict())
     params = {"bearing_model": model, "pump_config": str(cfg.source), "source_bag": str(f.path),
-              **{k: repr(v) for k, v in settings.as_dict().items()}}
+              **{k: repr(v) for k, v in settings.as_dict().items()},
+              **{f"health_{k}": repr(v) for k, v in core.health.settings.as_dict().items()}}
     log = McapLog(output, overwrite=overwrite, metadata=twin_log_metadata(
         cfg_text, str(cfg.source), params, {RUN_BAG_METADATA: {"model": model, "bag": str(f.path)}}))
     for topic, msgtype, qos in log_topics({name: f.topic_types()[name] for name in kinds}):
@@ -188,7 +191,7 @@ def cmd_run_bag(args) -> int:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     try:
         res = run_bag(args.bag, out, model=args.model, config_path=args.config, overwrite=args.overwrite,
-                      progress=None if args.quiet else sys.stderr)
+                      progress=None if args.quiet else sys.stderr, health=health_from_args(args.health))
     except McapReadError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
@@ -207,4 +210,30 @@ def add_parser(sub) -> None:
     p.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--health", action="append", default=[], metavar="NAME=VALUE",
+                   help="health monitor setting, as the node's health_<NAME> parameter (e.g. adapt=true, "
+                        "warn_pt=1.5); repeatable")
     p.set_defaults(func=cmd_run_bag)
+
+
+def health_from_args(items: list[str]):
+    """``["adapt=true", "warn_pt=1.5"]`` → :class:`~gerotor_twin.twin.health.HealthSettings` (InputError naming --health)."""
+    import dataclasses
+    from gerotor_twin.twin.health import HealthSettings
+    kinds = {f.name: f.type for f in dataclasses.fields(HealthSettings)}
+    kw = {}
+    for item in items:
+        name, _, text = item.partition("=")
+        if name not in kinds or not text:
+            raise InputError("--health", item, "NAME=VALUE with NAME one of " + ", ".join(kinds))
+        default = getattr(HealthSettings(), name)
+        try:
+            if isinstance(default, bool):
+                if text.lower() not in ("true", "false"):
+                    raise ValueError
+                kw[name] = text.lower() == "true"
+            else:
+                kw[name] = type(default)(text)
+        except ValueError:
+            raise InputError("--health", item, f"{name} as {type(default).__name__}") from None
+    return HealthSettings(**kw)

@@ -117,7 +117,7 @@ class TwinNode(Node):
             stamp_restart_s=prm["stamp_restart_s"], stamp_ahead_s=prm["stamp_ahead_s"],
             stamp_rebase_samples=prm["stamp_rebase_samples"], waveform_every=prm["waveform_every"],
             waveform_samples=prm["waveform_samples"])
-        self.core = TwinCore(self.model, self.settings)
+        self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
         self._warm_up(Inputs)
         self.stopping = False
         self.callback_errors = 0

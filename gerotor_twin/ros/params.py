@@ -100,7 +100,31 @@ PARAMETERS: tuple[Param, ...] = (
     Param("log_min_free_mb", 50.0, "after a write error (disk full) a new log file is started once this much "
                                    "space is free [MB]", 0.0, 1e6),
     Param("log_retry_s", 5.0, "period of the free-space check after a write error [s]", 0.1, 3600.0),
+) + (
+    # health monitor (gerotor_twin.twin.health); names = "health_" + HealthSettings field
+    Param("health_adapt", False, "true: the estimated leakage factor feeds back into the model; false: pure monitor [-]"),
+    Param("health_warn_pt", 2.0, "WARN when the reference efficiency fell this far below the calibrated one [%-pt]",
+          0.0, 100.0),
+    Param("health_error_pt", 5.0, "ERROR beyond this fall [%-pt] (>= health_warn_pt)", 0.0, 100.0),
+    Param("health_reference_rpm", 1500.0, "speed of the reference operating point [rpm]", 1.0, 100000.0),
+    Param("health_reference_bar", 20.0, "delivery pressure of the reference point [bar gauge]", 0.0, 1000.0),
+    Param("health_reference_oil_c", 50.0, "oil temperature of the reference point [degC] (used once the model "
+                                          "takes the oil temperature)", -50.0, 300.0),
+    Param("health_window_s", 1.0, "settled interval: one estimator update per window [s]", 0.05, 600.0),
+    Param("health_settle_s", 1.0, "speed and pressure steady this long before a window counts [s] "
+                                  "(>= 5 flow-meter time constants)", 0.0, 600.0),
+    Param("health_drift_per_sqrt_s", 0.02, "random-walk drift of the leakage factor [1/sqrt(s)]: tracking speed "
+                                           "vs noise", 0.0, 10.0),
+    Param("health_model_sd_rel", 0.003, "model error of the mean flow, relative, in the measurement noise [-]",
+          0.0, 1.0),
 )
+
+
+def health_settings(prm: Mapping[str, Any]):
+    """:class:`~gerotor_twin.twin.health.HealthSettings` from the node's ``health_*`` parameter values."""
+    from gerotor_twin.twin.health import HealthSettings
+    fields = {p.name[len("health_"):]: prm[p.name] for p in PARAMETERS if p.name.startswith("health_")}
+    return HealthSettings(**fields)
 
 
 #: Parameters rclpy declares itself on every node (Jazzy): name -> default.

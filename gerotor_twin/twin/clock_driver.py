@@ -107,6 +107,11 @@ class ClockDriver:
         return c
 
     # -------------------------------------------------------------------- tick
+    @property
+    def inputs(self):
+        """The model inputs of the last cell advanced (None before the first)."""
+        return self._inputs
+
     def tick(self, now_ns: int, res: TickResult) -> None:
         """Advance to the last grid point at or before ``now_ns`` [ns]; outputs go to ``res``."""
         S = self._S

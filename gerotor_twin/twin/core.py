@@ -99,6 +99,7 @@ from gerotor_twin.model.pump import PumpModel, PumpState
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.clock_driver import ClockDriver, TickResult
 from gerotor_twin.twin.events import EventLog
+from gerotor_twin.twin.health import HealthMonitor, HealthSettings
 from gerotor_twin.twin.input_book import InputBook
 from gerotor_twin.twin.revolution import RevolutionRecorder
 from gerotor_twin.twin.settings import NS, TwinSettings
@@ -136,7 +137,7 @@ class TwinCore:
     """
 
     def __init__(self, model: PumpModel, settings: TwinSettings | None = None, *,
-                 timer: Callable[[], float] = time.perf_counter):
+                 timer: Callable[[], float] = time.perf_counter, health: HealthSettings | None = None):
         self.model = model
         self.settings = s = settings or TwinSettings()
         self.N = model.N
@@ -147,6 +148,7 @@ class TwinCore:
         self.driver = ClockDriver(model, s, self.book, self.recorder, self._events)
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": {}}
         self._last_tick: TickResult | None = None
+        self.health = HealthMonitor(model, health or HealthSettings())
 
     # ------------------------------------------------------------------ inputs
     def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None) -> bool:
@@ -162,7 +164,16 @@ class TwinCore:
         bool
             True if accepted; False if rejected (counted and reported) or from another source.
         """
-        return self.book.add_message(kind, msg, receive_ns, sequence)
+        return self._health_sample(kind, self.book.add_message(kind, msg, receive_ns, sequence), receive_ns)
+
+    def _health_sample(self, kind: str, accepted: bool, receive_ns: int) -> bool:
+        """Hand an accepted measured flow sample to the health monitor; returns ``accepted``."""
+        if accepted and kind == "delivery_flow":
+            with self.book.lock:
+                last = self.book.channels["delivery_flow"].latest()
+            if last is not None:
+                self.health.add_flow(last[0], receive_ns)
+        return accepted
 
     def note_sequence(self, kind: str, seq: int | None, receive_ns: int) -> int:
         """Book the publisher sequence number of a received ``kind`` message (any thread).
@@ -206,7 +217,7 @@ class TwinCore:
         bool
             True if accepted; False if rejected (counted, reported, previous value held).
         """
-        return self.book.add_sample(kind, value, stamp_ns, receive_ns)
+        return self._health_sample(kind, self.book.add_sample(kind, value, stamp_ns, receive_ns), receive_ns)
 
     def pop_events(self) -> list[tuple[int, str]]:
         """Rate-limited events since the last call: ``(level, text)``, level 1 = WARN, 2 = ERROR."""
@@ -230,6 +241,8 @@ class TwinCore:
         now_ns = int(now_ns)
         res = TickResult(now_ns, self.driver.t_ns)
         self.driver.tick(now_ns, res)
+        running = self.driver.status == "running"
+        res.messages.extend(self.health.observe(now_ns, self.driver.inputs if running else None, res.messages))
         res.compute_s = self._timer() - t0
         self.driver.count_tick(res)
         self._win["simulated_s"] += res.simulated_s
@@ -321,5 +334,7 @@ class TwinCore:
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}
         statuses = [model_status(snap, delta), input_status(snap, self.settings.stale_timeout_s, delta)]
+        if self.health.settings.enabled:
+            statuses.append(self.health.status())
         statuses.extend(extra or [])
         return m.diagnostic_array(now_ns, statuses)

@@ -47,6 +47,7 @@ FLOW_SUMMARY = "twin/flow_summary"
 ECCENTRICITY = "twin/eccentricity"
 TOOTH_GAPS = "twin/tooth_gaps"
 CHAMBER_WAVEFORM = "twin/chamber_waveform"
+HEALTH = "twin/health"          #: health estimate, once per settled interval (:mod:`gerotor_twin.twin.health`)
 DIAGNOSTICS_TOPIC = "/diagnostics"
 
 #: topic -> message type of every output of the core (``/diagnostics`` is separate).
@@ -57,6 +58,7 @@ OUTPUT_TOPICS: dict[str, str] = {
     ECCENTRICITY: m.VECTOR3_STAMPED,
     TOOTH_GAPS: m.FLOAT64_MULTIARRAY,
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
+    HEALTH: m.FLOAT64_MULTIARRAY,
 }
 
 #: The outputs published at ``publish_rate_hz`` (instantaneous values).

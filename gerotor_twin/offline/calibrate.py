@@ -1,0 +1,229 @@
+"""Offline calibration: fit leakage parameters to the mean delivery flow of bench plateaus.
+
+For every steady plateau of the recordings (:mod:`.plateaus`, the report's detector) the
+twin is run to periodic steady state at the plateau's measured speed, suction and
+delivery pressure (:func:`.fit_model.plateau_flow`), in parallel over plateaus on all
+cores.  The weighted residuals ``r_i = (q_model,i − q_meas,i) / σ_i`` (σ_i: standard
+error of the plateau's mean flow, ⊕ ``flow_floor`` × q) are minimised by
+:func:`scipy.optimize.least_squares` over the identifiable combinations of the chosen
+log-factors (:mod:`.identifiability`); the others stay at the prior.  Every k-th plateau
+of each recording is held out first (fit on the rest, error on those), then the
+parameters are refitted on all plateaus for the config that is written.
+"""
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..errors import InputError
+from . import identifiability as ident
+from .fit_model import PARAMETERS, PlateauTask, apply, plateau_flow, prior_values
+from .plateaus import PlateauRecord
+
+__all__ = ["Evaluator", "FitResult", "fit", "split_holdout", "plateau_errors"]
+
+FD_STEP = 0.02          #: finite-difference step of the log-factors [-] (2 % of the value)
+
+
+class Evaluator:
+    """Runs :func:`plateau_flow` for many (config, plateau) pairs, in worker processes."""
+
+    def __init__(self, raw_prior: dict, bearing: str, jobs: int | None = None, progress=None):
+        self.raw_prior = raw_prior
+        self.bearing = bearing
+        self.table_tip = float(raw_prior["clearances"]["tooth_tip_m"])
+        self.jobs = max(1, int(jobs or os.cpu_count() or 1))
+        self.progress = progress
+        self.simulated = 0
+        self._pool = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def flows(self, names, xs: list[np.ndarray], records: list[PlateauRecord]) -> np.ndarray:
+        """Model mean delivery flow [m³/s], shape (len(xs), len(records))."""
+        tasks = [PlateauTask(apply(self.raw_prior, names, x), self.table_tip, self.bearing, r.omega,
+                             r.p_suction_pa, r.p_delivery_pa, r.oil_temperature_c)
+                 for x in xs for r in records]
+        if self.jobs == 1 or len(tasks) < 2:
+            out = [plateau_flow(t) for t in tasks]
+        else:
+            if self._pool is None:   # compile/load the kernel here first: forked workers inherit it
+                plateau_flow(tasks[0])
+                self._pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("fork"))
+            out = list(self._pool.map(plateau_flow, tasks, chunksize=max(1, len(tasks) // (4 * self.jobs))))
+        self.simulated += len(tasks)
+        if self.progress:
+            self.progress(f"  {self.simulated} plateau simulations")
+        return np.array([o["flow_m3s"] for o in out]).reshape(len(xs), len(records))
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """A least-squares fit over one set of plateaus (log-factors x = ln(value/prior))."""
+    names: tuple[str, ...]
+    x: np.ndarray                #: fitted log-factors [-]
+    cov_x: np.ndarray            #: covariance of x (rank r) [-]
+    analysis: dict               #: :func:`identifiability.analyse` at the prior
+    residuals: np.ndarray        #: weighted residuals at the fit [-]
+    flow_model: np.ndarray       #: model flow at the fit [m³/s]
+    flow_prior: np.ndarray       #: model flow at the prior [m³/s]
+    s2: float                    #: residual variance factor (≥ 1) [-]
+    dof: int
+    iterations: int
+
+
+def sigmas(records: list[PlateauRecord], flow_floor: float) -> np.ndarray:
+    """Standard deviation of each plateau's mean flow [m³/s] (≥ 1e-9)."""
+    sem = np.array([r.flow_sem_m3s if math.isfinite(r.flow_sem_m3s) else 0.0 for r in records])
+    q = np.array([r.flow_m3s for r in records])
+    return np.maximum(np.hypot(sem, flow_floor * np.abs(q)), 1e-9)
+
+
+def _jacobian(ev: Evaluator, names, x, records, f0, sig) -> np.ndarray:
+    xs = [x + FD_STEP * e for e in np.eye(len(names))]
+    fp = ev.flows(names, xs, records)
+    return ((fp - f0) / FD_STEP / sig).T
+
+
+def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.1, flow_floor: float = 0.0,
+        progress=None) -> FitResult:
+    """Fit the identifiable combinations of ``names`` to ``records`` (see module doc)."""
+    if len(records) < 1:
+        raise InputError("plateaus", 0, "at least one steady plateau to fit")
+    say = progress or (lambda s: None)
+    q = np.array([r.flow_m3s for r in records])
+    sig = sigmas(records, flow_floor)
+    p = len(names)
+    f_prior = ev.flows(names, [np.zeros(p)], records)[0]
+    analysis = ident.analyse(_jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond)
+    basis = analysis["basis"]
+    say(f"  identifiable directions: {len(analysis['kept'])} of {p}")
+    cache = {}
+
+    def model(b):
+        key = tuple(np.round(b, 12))
+        if key not in cache:
+            cache[key] = ev.flows(names, [basis @ b], records)[0]
+        return cache[key]
+
+    def fun(b):
+        r = (model(b) - q) / sig
+        say(f"  iteration: x = {np.round(basis @ b, 4).tolist()}, rms weighted residual {np.sqrt(np.mean(r ** 2)):.3g}")
+        return r
+
+    def jac(b):
+        x = basis @ b
+        return _jacobian(ev, names, x, records, model(b), sig) @ basis
+
+    r = basis.shape[1]
+    if r == 0:
+        b, nfev = np.zeros(0), 0
+    else:
+        sol = least_squares(fun, np.zeros(r), jac=jac, bounds=(-1.5, 1.5), x_scale=0.05, xtol=1e-4, ftol=1e-6,
+                            max_nfev=30)
+        b, nfev = sol.x, sol.nfev
+    x = basis @ b
+    res = (model(b) - q) / sig
+    jb = jac(b) if r else np.zeros((len(records), 0))
+    cov_b, s2, dof = ident.covariance(jb, res) if r else (np.zeros((0, 0)), math.nan, len(records))
+    return FitResult(tuple(names), x, basis @ cov_b @ basis.T, analysis, res, model(b), f_prior, s2, dof, nfev)
+
+
+def split_holdout(records: list[PlateauRecord], every: int) -> tuple[list, list]:
+    """Every ``every``-th plateau of each recording held out (0: none) → (train, held out)."""
+    if every == 0:
+        return list(records), []
+    if every < 2:
+        raise InputError("--holdout", every, "0 (none) or an integer ≥ 2 (every k-th plateau held out)")
+    train, held = [], []
+    for r in records:
+        (held if r.index % every == 0 else train).append(r)
+    if not train:
+        raise InputError("--holdout", every, "a value leaving plateaus to fit")
+    return train, held
+
+
+def plateau_errors(records: list[PlateauRecord], flow_model: np.ndarray, displacement_m3: float) -> list[dict]:
+    """Per plateau: measured and model flow [m³/s], η_v [-] and their errors (model − measured)."""
+    rows = []
+    for r, fm in zip(records, flow_model):
+        qth = displacement_m3 * r.omega / (2 * math.pi)
+        rows.append({"plateau": r.label(), "rpm": r.rpm, "p_delivery_pa": r.p_delivery_pa,
+                     "oil_temperature_c": r.oil_temperature_c, "flow_measured_m3s": r.flow_m3s,
+                     "flow_model_m3s": float(fm), "flow_error_m3s": float(fm - r.flow_m3s),
+                     "eta_measured": r.flow_m3s / qth, "eta_model": float(fm) / qth,
+                     "eta_error": float(fm - r.flow_m3s) / qth})
+    return rows
+
+
+def summary_stats(rows: list[dict], key: str = "eta_error") -> dict:
+    """Bias, RMSE, max |·| of one error column of :func:`plateau_errors` rows."""
+    e = np.array([r[key] for r in rows], float)
+    if e.size == 0:
+        return {"bias": None, "rmse": None, "max_abs": None, "n": 0}
+    return {"bias": float(e.mean()), "rmse": float(np.sqrt(np.mean(e ** 2))), "max_abs": float(np.abs(e).max()),
+            "n": int(e.size)}
+
+
+def parameter_table(fr: FitResult, raw_prior: dict, z: float = 1.96) -> list[dict]:
+    """Fitted value, 95 % interval (log-normal, ``z`` σ) and whether the data determine it alone."""
+    prior = prior_values(raw_prior, fr.names)
+    sd = np.sqrt(np.clip(np.diag(fr.cov_x), 0, None))
+    alone = _separately_determined(fr)
+    rows = []
+    for i, n in enumerate(fr.names):
+        rows.append({"name": n, "field": f"{PARAMETERS[n].section}.{PARAMETERS[n].key}", "unit": PARAMETERS[n].unit,
+                     "prior": float(prior[i]), "value": float(prior[i] * math.exp(fr.x[i])),
+                     "log_factor": float(fr.x[i]), "log_factor_sd": float(sd[i]),
+                     "ci95": [float(prior[i] * math.exp(fr.x[i] - z * sd[i])),
+                              float(prior[i] * math.exp(fr.x[i] + z * sd[i]))],
+                     "identifiable": bool(alone[i])})
+    return rows
+
+
+def _separately_determined(fr: FitResult) -> np.ndarray:
+    """A parameter is determined on its own when its axis lies in the kept subspace."""
+    basis = fr.analysis["basis"]
+    out = np.zeros(len(fr.names), bool)
+    for i in range(len(fr.names)):
+        e = np.zeros(len(fr.names))
+        e[i] = 1.0
+        out[i] = basis.shape[1] > 0 and np.linalg.norm(basis @ (basis.T @ e) - e) < 1e-6 if basis.size else False
+    return out
+
+
+def combinations(fr: FitResult, z: float = 1.96) -> list[dict]:
+    """Each identifiable combination c·x with its standard deviation and 95 % interval."""
+    out = []
+    combos = fr.analysis["combinations"]
+    for k in range(combos.shape[1]):
+        c = combos[:, k]
+        v, sd = float(c @ fr.x), float(math.sqrt(max(c @ fr.cov_x @ c, 0.0)))
+        out.append({"coefficients": dict(zip(fr.names, c.tolist())),
+                    "label": ident.combination_label(c, fr.names), "value": v, "sd": sd,
+                    "ci95": [v - z * sd, v + z * sd], "factor": math.exp(v),
+                    "factor_ci95": [math.exp(v - z * sd), math.exp(v + z * sd)]})
+    return out
+
+
+def run_timed(fn, *args, **kw):
+    """``fn(*args, **kw)`` and its wall time [s]."""
+    t0 = time.perf_counter()
+    out = fn(*args, **kw)
+    return out, time.perf_counter() - t0

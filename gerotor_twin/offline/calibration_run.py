@@ -1,0 +1,217 @@
+"""``gerotor-twin calibrate``: plateaus of bench bags → fitted pump config with provenance.
+
+Steps: detect plateaus in every bag; hold out every k-th plateau, fit on the rest and
+report the error on the held-out ones (prior vs fitted); refit on all plateaus; write
+the pump YAML (the prior with the fitted values and a ``calibration`` block: bags, date,
+parameters with 95 % intervals, identifiability, residuals), and optionally the full
+result as JSON and a small HTML report.  See :mod:`.calibrate` for the fit.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .. import __version__
+from ..config import load_config, parse_config
+from ..errors import InputError
+from ..units import m3s_to_lpm
+from . import calibrate as C
+from .fit_model import apply, parse_params
+from .plateaus import DetectorSettings, bench_plateaus
+
+__all__ = ["calibrate_bags", "fitted_config", "cmd_calibrate", "add_parser"]
+
+
+def _fit_summary(fr: C.FitResult, raw: dict, records, displacement: float) -> dict:
+    fitted = C.plateau_errors(records, fr.flow_model, displacement)
+    prior = C.plateau_errors(records, fr.flow_prior, displacement)
+    a = fr.analysis
+    return {"parameters": C.parameter_table(fr, raw), "combinations": C.combinations(fr),
+            "groups": a["groups"], "unseparable": [list(p) for p in a["unseparable"]],
+            "insensitive": a["insensitive"], "correlation_at_prior": _nan_none(a["correlation"]),
+            "singular_ratios": a["singular_ratios"].tolist(), "rcond": a["rcond"],
+            "residual_variance_factor": fr.s2, "dof": fr.dof, "function_evaluations": fr.iterations,
+            "plateaus": fitted, "plateaus_prior": prior,
+            "eta_error": C.summary_stats(fitted), "eta_error_prior": C.summary_stats(prior),
+            "flow_error_m3s": C.summary_stats(fitted, "flow_error_m3s"),
+            "flow_error_prior_m3s": C.summary_stats(prior, "flow_error_m3s")}
+
+
+def _nan_none(a: np.ndarray) -> list:
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in np.asarray(a)]
+
+
+def _holdout(ev, names, train, held, raw, displacement, opts, say) -> dict:
+    say(f"hold-out: fitting {len(train)} plateaus, {len(held)} held out")
+    fr = C.fit(ev, names, train, **opts, progress=say)
+    q_held = ev.flows(names, [fr.x, np.zeros(len(names))], held)
+    after = C.plateau_errors(held, q_held[0], displacement)
+    before = C.plateau_errors(held, q_held[1], displacement)
+    return {"train": [r.label() for r in train], "held_out": [r.label() for r in held],
+            "parameters": C.parameter_table(fr, raw), "plateaus": after, "plateaus_prior": before,
+            "eta_error": C.summary_stats(after), "eta_error_prior": C.summary_stats(before)}
+
+
+def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
+                   holdout: int = 4, jobs: int | None = None, rcond: float = 0.1, flow_floor: float = 0.0,
+                   detector: DetectorSettings = DetectorSettings(), progress=None) -> dict:
+    """Fit ``params`` to the plateaus of ``bags`` (see module doc); the whole result as a dict."""
+    say = progress or (lambda s: None)
+    cfg = load_config(config_path)
+    raw = cfg.to_dict()
+    raw.pop("calibration", None)
+    records = []
+    for b in bags:
+        found = bench_plateaus(b, detector)
+        say(f"{b}: {len(found)} plateaus")
+        records += found
+    if not records:
+        raise InputError("--bench", ", ".join(map(str, bags)), "recordings with at least one steady plateau "
+                         f"(≥ {detector.min_s + detector.settle_s:g} s of constant speed and pressure)")
+    displacement = cfg.gears.displacement_closed_form()
+    opts = {"rcond": rcond, "flow_floor": flow_floor}
+    (out, wall) = C.run_timed(_run, records, raw, params, model, holdout, jobs, displacement, opts, say)
+    out.update({"bags": [str(b) for b in bags], "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+                "prior_config": _display_path(cfg.source), "model": model, "params": list(params), "holdout_every": holdout,
+                "wall_time_s": wall, "software": f"gerotor_twin {__version__}",
+                "plateau_records": [r.as_dict() for r in records], "detector": detector.__dict__})
+    out["config"] = apply(raw, params, np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
+    return out
+
+
+def _display_path(path) -> str:
+    """``path`` relative to the current directory when it lies below it (portable provenance)."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def _run(records, raw, params, model, holdout, jobs, displacement, opts, say) -> dict:
+    train, held = C.split_holdout(records, holdout)
+    with C.Evaluator(raw, model, jobs, progress=say) as ev:
+        ho = _holdout(ev, params, train, held, raw, displacement, opts, say) if held else None
+        say(f"final fit on all {len(records)} plateaus")
+        fr = C.fit(ev, params, records, **opts, progress=say)
+        return {"holdout": ho, "fit": _fit_summary(fr, raw, records, displacement),
+                "simulations": ev.simulated, "jobs": ev.jobs}
+
+
+def provenance(result: dict) -> dict:
+    """The ``calibration`` block of the written config (plain YAML types)."""
+    f = result["fit"]
+    ho = result["holdout"]
+    block = {"tool": "gerotor-twin calibrate", "software": result["software"], "date": result["date"],
+             "bags": result["bags"], "prior_config": result["prior_config"], "model": result["model"],
+             "plateaus": len(result["plateau_records"]),
+             "parameters": {p["name"]: {"field": p["field"], "prior": p["prior"], "value": p["value"],
+                                        "ci95": p["ci95"], "separately_identifiable": p["identifiable"]}
+                            for p in f["parameters"]},
+             "fitted_combinations": [{"combination": c["label"], "factor": c["factor"], "factor_ci95": c["factor_ci95"]}
+                                     for c in f["combinations"]],
+             "unseparable": f["unseparable"],
+             "residuals": {"flow_rmse_m3s": f["flow_error_m3s"]["rmse"], "eta_rmse": f["eta_error"]["rmse"],
+                           "eta_max_abs": f["eta_error"]["max_abs"],
+                           "eta_rmse_prior": f["eta_error_prior"]["rmse"]}}
+    if ho:
+        block["holdout"] = {"held_out": ho["held_out"], "eta_max_abs": ho["eta_error"]["max_abs"],
+                            "eta_max_abs_prior": ho["eta_error_prior"]["max_abs"]}
+    return json.loads(json.dumps(block, default=float))
+
+
+def fitted_config(result: dict) -> dict:
+    """The pump config mapping to write: fitted values + provenance; validated by the loader."""
+    raw = json.loads(json.dumps(result["config"]))
+    raw["calibration"] = provenance(result)
+    parse_config(raw, source="fitted config")       # what the loader will accept
+    return raw
+
+
+def print_summary(result: dict, out=None) -> None:
+    """The figures a bench engineer looks at first."""
+    out = out or sys.stdout
+    f = result["fit"]
+    for p in f["parameters"]:
+        u = 1e6 if p["unit"] == "m" else 1.0
+        unit = "µm" if p["unit"] == "m" else ""
+        print(f"  {p['name']:8s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:2s}  95 % CI "
+              f"[{p['ci95'][0] * u:.3f}, {p['ci95'][1] * u:.3f}]"
+              f"{'' if p['identifiable'] else '  (not separately identifiable: common factor of its group)'}",
+              file=out)
+    for a, b in f["unseparable"]:
+        print(f"  the data cannot separate {a} and {b}: fitted their combination, their ratio kept at the prior",
+              file=out)
+    for c in f["combinations"]:
+        print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}"
+              f"..{c['factor_ci95'][1]:.4f})", file=out)
+    e, e0 = f["eta_error"], f["eta_error_prior"]
+    print(f"  all {e['n']} plateaus: |η error| max {100 * e0['max_abs']:.2f} → {100 * e['max_abs']:.2f} pt, "
+          f"RMSE {100 * e0['rmse']:.2f} → {100 * e['rmse']:.2f} pt; flow RMSE "
+          f"{m3s_to_lpm(f['flow_error_prior_m3s']['rmse']):.3f} → {m3s_to_lpm(f['flow_error_m3s']['rmse']):.3f} L/min",
+          file=out)
+    ho = result["holdout"]
+    if ho:
+        print(f"  hold-out ({len(ho['held_out'])} plateaus, fitted on the other {len(ho['train'])}): |η error| max "
+              f"{100 * ho['eta_error_prior']['max_abs']:.2f} → {100 * ho['eta_error']['max_abs']:.2f} pt", file=out)
+
+
+def cmd_calibrate(args) -> int:
+    """The ``calibrate`` subcommand."""
+    out = Path(args.output)
+    if out.exists() and not args.overwrite:
+        raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
+    if args.jobs is not None and args.jobs < 1:
+        raise InputError("--jobs", args.jobs, "an integer ≥ 1")
+    names = parse_params(args.params)
+    from ..model.pump import BEARING_MODELS
+    if args.model not in BEARING_MODELS:
+        raise InputError("--model", args.model, " | ".join(BEARING_MODELS))
+    for flag, v in (("--settle-s", args.settle_s), ("--min-plateau-s", args.min_plateau_s)):
+        if not (math.isfinite(v) and 0 <= v <= 600):
+            raise InputError(flag, v, "[0, 600] s")
+    say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
+    det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s)
+    res = calibrate_bags(args.bench, config_path=args.config, params=names, model=args.model,
+                         holdout=args.holdout, jobs=args.jobs, detector=det, progress=say)
+    raw = fitted_config(res)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("# pump config fitted by `gerotor-twin calibrate` (provenance in `calibration`)\n"
+                   + yaml.safe_dump(raw, sort_keys=False, allow_unicode=True))
+    print(f"wrote {out} ({res['simulations']} plateau simulations on {res['jobs']} processes, "
+          f"{res['wall_time_s']:.1f} s)")
+    print_summary(res)
+    if args.json:
+        Path(args.json).write_text(json.dumps(res, indent=1, default=float))
+        print(f"wrote {args.json}")
+    if args.report:
+        from .calibration_report import write_report
+        write_report(res, args.report)
+        print(f"wrote {args.report}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("calibrate", help="fit leakage clearances to bench recordings; write a pump config",
+                       description="Detect steady plateaus in bench recordings, fit the chosen parameters to the "
+                                   "measured mean delivery flow (least squares, identifiable combinations only), "
+                                   "report hold-out errors and write a pump YAML with a provenance block.")
+    p.add_argument("--bench", nargs="+", required=True, metavar="BAG", help="bench recordings (MCAP)")
+    p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
+    p.add_argument("--params", default="tip,lateral", help="comma list of tip, lateral, cd, tip_dh (default tip,lateral)")
+    p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
+    p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
+    p.add_argument("--holdout", type=int, default=4, help="hold out every k-th plateau of each bag (0: none; default 4)")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--settle-s", type=float, default=1.0, help="dropped at each plateau start [s] (default 1)")
+    p.add_argument("--min-plateau-s", type=float, default=1.5, help="shortest plateau kept [s] (default 1.5)")
+    p.add_argument("--json", metavar="F", help="write the whole result (per plateau, covariance) as JSON")
+    p.add_argument("--report", metavar="F.html", help="write a one-page HTML report")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=cmd_calibrate)

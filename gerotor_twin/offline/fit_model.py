@@ -1,0 +1,137 @@
+"""What a calibration can fit, and the model evaluated at one plateau (in a worker process).
+
+Parameters are fitted as log-factors ``x = ln(value / prior)`` so that clearances of
+tens of µm and a discharge coefficient near 0.7 share one scale; ``x = 0`` is the prior
+(the pump config given).
+
+Fittable parameters (``--params``):
+
+=========  ============================  ===========================================
+name       config field                  what it scales
+=========  ============================  ===========================================
+tip        clearances.tooth_tip_m        tooth-tip leakage (≈ δ³ Poiseuille + Couette)
+lateral    clearances.lateral_m          lateral, suction–delivery and drain leakage (≈ s³)
+cd         orifice.cd_max                port orifices (filling at high speed)
+tip_dh     leakage.tip_dh                equivalent length of the tooth-tip gap
+=========  ============================  ===========================================
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..config import PumpConfig, parse_config
+from ..errors import InputError
+from ..geometry.tables import cached_tables
+from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
+
+__all__ = ["FitParameter", "PARAMETERS", "parse_params", "apply", "PlateauTask", "plateau_flow"]
+
+
+@dataclass(frozen=True)
+class FitParameter:
+    """One fittable config value: where it lives and its physical bounds."""
+    name: str
+    section: str
+    key: str
+    lower: float                 #: lowest value allowed [unit of the field]
+    upper: float                 #: highest value allowed
+    unit: str
+    description: str
+
+
+PARAMETERS = {p.name: p for p in (
+    FitParameter("tip", "clearances", "tooth_tip_m", 1e-6, 4.9e-4, "m", "tooth-tip clearance δ"),
+    FitParameter("lateral", "clearances", "lateral_m", 1e-6, 4.9e-4, "m", "lateral clearance per face"),
+    FitParameter("cd", "orifice", "cd_max", 0.1, 1.0, "-", "turbulent discharge coefficient of the ports"),
+    FitParameter("tip_dh", "leakage", "tip_dh", 0.01, 10.0, "-", "dh of the tooth-tip gap's equivalent length"),
+)}
+
+
+def parse_params(text: str) -> tuple[str, ...]:
+    """``"tip,lateral"`` → ``("tip", "lateral")``; InputError naming the unknown one."""
+    names = tuple(s.strip() for s in str(text).split(",") if s.strip())
+    if not names:
+        raise InputError("--params", text, "a comma-separated list of " + ", ".join(PARAMETERS))
+    for n in names:
+        if n not in PARAMETERS:
+            raise InputError("--params", n, ", ".join(PARAMETERS))
+    if len(set(names)) != len(names):
+        raise InputError("--params", text, "each parameter once")
+    return names
+
+
+def prior_values(raw: dict, names) -> np.ndarray:
+    """The prior value of each named parameter in a raw config mapping."""
+    return np.array([float(raw[PARAMETERS[n].section][PARAMETERS[n].key]) for n in names])
+
+
+def apply(raw: dict, names, x) -> dict:
+    """A copy of the raw config mapping with each parameter = prior · exp(x), clipped to its bounds."""
+    out = json.loads(json.dumps(raw))
+    for n, xi in zip(names, x):
+        p = PARAMETERS[n]
+        v = float(raw[p.section][p.key]) * math.exp(float(xi))
+        out.setdefault(p.section, {})[p.key] = min(max(v, p.lower), p.upper)
+    return out
+
+
+@dataclass(frozen=True)
+class PlateauTask:
+    """One model evaluation: a config, an outer-gear model and a plateau's measured inputs (SI)."""
+    raw_config: dict             #: the pump config mapping (``PumpConfig.to_dict()`` form)
+    table_tip_m: float           #: δ of the geometry tables to reuse (the prior's) [m]
+    bearing: str
+    omega: float                 #: [rad/s]
+    p_suction_pa: float          #: [Pa abs]; NaN: the config's suction pressure
+    p_delivery_pa: float         #: [Pa abs]
+    oil_temperature_c: float     #: [°C]; carried, see :func:`plateau_flow`
+
+
+_TABLES: dict[str, object] = {}
+
+
+def _tables(cfg: PumpConfig, table_tip_m: float):
+    """Geometry tables of the prior δ, memoised per process, relabelled with ``cfg``'s δ.
+
+    δ enters the kernel's tooth-tip gap height directly (``tip_clearance + …``); in the
+    tables it only shifts the inner profile by δ (columns change by O(δ/R) ≈ 1e-3 of
+    themselves), so a trial δ reuses the prior's tables instead of a 6 s rebuild.
+    """
+    g = replace(cfg.gears, tip_clearance=table_tip_m)
+    key = repr((g, cfg.suction_port, cfg.delivery_port, cfg.numerics.table_points))
+    if key not in _TABLES:
+        _TABLES[key] = cached_tables(g, cfg.suction_port, cfg.delivery_port, cfg.numerics.table_points)
+    return replace(_TABLES[key], tip_clearance=cfg.gears.tip_clearance)
+
+
+def plateau_flow(task: PlateauTask) -> dict:
+    """Periodic steady state of the model at one plateau's measured inputs.
+
+    Returns
+    -------
+    dict
+        ``flow_m3s`` (revolution-mean delivery), ``theoretical_m3s``, ``revolutions``,
+        ``periodicity_error``.
+
+    Notes
+    -----
+    The plateau's oil temperature is carried in ``task.oil_temperature_c`` but not yet used:
+    until the model takes the oil temperature (issue 13), the plateau is simulated at the
+    config's fluid properties.  Once it does, pass it here (one line, marked below).
+    """
+    from ..model.pump import PumpModel
+    from ..model.steady import run_steady
+
+    cfg = parse_config(task.raw_config, source="calibration trial")
+    model = PumpModel(cfg, task.bearing, tables=_tables(cfg, task.table_tip_m))
+    p_atm = cfg.fluid.atmospheric_pa
+    ps = None if not math.isfinite(task.p_suction_pa) else task.p_suction_pa
+    # issue 13: hand task.oil_temperature_c to the model here once it accepts an oil temperature
+    res = run_steady(model, rad_s_to_rpm(task.omega), pa_abs_to_bar_gauge(task.p_delivery_pa, p_atm),
+                     max_revolutions=60, rtol=1e-6, p_suction=ps)
+    return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,
+            "revolutions": res.revolutions, "periodicity_error": res.periodicity_error}

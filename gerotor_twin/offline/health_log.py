@@ -1,0 +1,89 @@
+"""``gerotor-twin health TWIN.mcap``: the health estimate of a twin log over time, and its alarm intervals.
+
+Reads ``twin/health`` (see :mod:`gerotor_twin.twin.health`) from a node log or a
+``run-bag`` output and prints one line per update (or every ``--every``-th) and the
+intervals spent in WARN and ERROR.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..io import McapReadError, open_mcap, read_topics
+from ..io.reader import multiarray_series
+from ..twin.health import HEALTH_FIELDS
+
+__all__ = ["load_health", "alarm_intervals", "cmd_health", "add_parser"]
+
+LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+
+
+def load_health(path) -> tuple[np.ndarray, list[dict]]:
+    """Times [s, from the log's first measured-flow input (the bench recording's start), else its first
+    ``/diagnostics``, else the first update] and field dicts of every ``twin/health`` message."""
+    f = open_mcap(path)
+    types = f.topic_types()
+    topic = next((t for t in types if t.endswith("twin/health")), None)
+    if topic is None:
+        raise McapReadError(str(path), "no twin/health topic (a log of a version without the health monitor?)")
+    s = read_topics(path, [topic])[topic]
+    if len(s) == 0:
+        raise McapReadError(str(path), "twin/health has no messages (no measured delivery flow, or never steady)")
+    t0_ns = int(s.log_time_ns[0])
+    for suffix in ("bench/delivery_flow", "/diagnostics"):
+        other = next((t for t in types if t.endswith(suffix)), None)
+        d = read_topics(path, [other])[other] if other else ()
+        if len(d):
+            t0_ns = min(t0_ns, int(d.log_time_ns[0]))
+            break
+    t, v, _ = multiarray_series(s, t0_ns=t0_ns)
+    return t, [dict(zip(HEALTH_FIELDS, row)) for row in v]
+
+
+def alarm_intervals(t: np.ndarray, rows: list[dict]) -> list[tuple[str, float, float]]:
+    """Maximal stretches of WARN or ERROR: (level name, start [s], end [s]) (end = last update at that level)."""
+    closed, prev = [], None
+    for ti, r in zip(t, rows):
+        name = LEVELS.get(int(r["level"]), "?")
+        if prev is None or name != prev[0]:
+            if prev is not None and prev[0] in ("WARN", "ERROR"):
+                closed.append(prev)
+            prev = (name, float(ti), float(ti))
+        else:
+            prev = (name, prev[1], float(ti))
+    if prev is not None and prev[0] in ("WARN", "ERROR"):
+        closed.append(prev)
+    return closed
+
+
+def cmd_health(args) -> int:
+    t, rows = load_health(args.log)
+    every = max(1, args.every)
+    print(f"{args.log}: {len(rows)} health updates over {t[-1]:.1f} s")
+    print("   t [s]  leakage factor      eta_ref [%]      residual [L/min]  level")
+    for i, (ti, r) in enumerate(zip(t, rows)):
+        if i % every and i != len(rows) - 1:
+            continue
+        print(f"  {ti:6.1f}  {r['leakage_factor']:.4f} ± {r['leakage_factor_sd']:.4f}  "
+              f"{100 * r['reference_efficiency']:6.2f} ± {100 * r['reference_efficiency_sd']:.2f}  "
+              f"{6e4 * r['residual_m3s']:+8.3f}          {LEVELS.get(int(r['level']), '?')}")
+    alarms = alarm_intervals(t, rows)
+    for name, a, b in alarms:
+        print(f"  {name} from {a:.1f} s to {b:.1f} s")
+    if not alarms:
+        print("  no WARN or ERROR")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"t_s": t.tolist(), "updates": rows,
+                                               "alarms": [list(a) for a in alarms]}, indent=1))
+        print(f"wrote {args.json}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("health", help="print the health estimate (twin/health) of a twin log and its alarms")
+    p.add_argument("log", help="node log or run-bag output (MCAP)")
+    p.add_argument("--every", type=int, default=1, help="print every N-th update (default 1)")
+    p.add_argument("--json", metavar="F", help="write every update and the alarm intervals as JSON")
+    p.set_defaults(func=cmd_health)

@@ -1,0 +1,112 @@
+"""Steady plateaus of a bench recording as records a fit can use (the report's detector).
+
+One :class:`PlateauRecord` per steady stretch found by
+:func:`gerotor_twin.report.analysis.find_plateaus` on the bench series averaged on
+a 0.1 s grid: the mean measured speed, delivery and suction pressure, oil
+temperature and delivery flow over the plateau, and the standard error of the
+mean flow (bin scatter, or batch means when larger).  SI units throughout.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..report.analysis import binned, find_plateaus, make_grid
+from ..report.data import load_bench
+from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
+
+__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus"]
+
+
+@dataclass(frozen=True)
+class DetectorSettings:
+    """Plateau detector settings (see :func:`~gerotor_twin.report.analysis.find_plateaus`)."""
+    grid_s: float = 0.1          #: bin width [s]
+    min_s: float = 1.5           #: shortest plateau kept, after settling [s]
+    settle_s: float = 1.0        #: dropped at the start of each plateau (drive, valve, flow meter) [s]
+
+
+@dataclass(frozen=True)
+class PlateauRecord:
+    """One steady operating point measured on the bench (means over the plateau, SI)."""
+    bag: str                     #: recording path
+    index: int                   #: plateau number in the recording (1-based)
+    t0_s: float                  #: start, relative to the recording's first message [s]
+    t1_s: float                  #: end [s]
+    omega: float                 #: mean shaft speed [rad/s]
+    p_delivery_pa: float         #: mean delivery pressure [Pa abs]
+    p_suction_pa: float          #: mean suction pressure [Pa abs] (NaN: not recorded)
+    oil_temperature_c: float     #: mean oil temperature [°C] (NaN: not recorded)
+    flow_m3s: float              #: mean measured delivery flow [m³/s]
+    flow_sem_m3s: float          #: standard error of that mean (see :func:`mean_standard_error`) [m³/s]
+    bins: int                    #: grid bins averaged [-]
+
+    @property
+    def rpm(self) -> float:
+        return rad_s_to_rpm(self.omega)
+
+    def bar(self, p_atm: float) -> float:
+        """Delivery gauge pressure [bar] against ``p_atm`` [Pa]."""
+        return float(pa_abs_to_bar_gauge(self.p_delivery_pa, p_atm))
+
+    def label(self) -> str:
+        return f"{self.bag.rsplit('/', 1)[-1]}#{self.index}"
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def mean_standard_error(v: np.ndarray, dt: float, batch_s: float = 0.5) -> float:
+    """Standard error of the mean of a binned series [units of v], robust to correlated noise.
+
+    The larger of the bin scatter / √bins and the batch-means estimate (batches of ``batch_s``
+    [s], at least 3): slow components (aliased flow ripple, a meter's drift) correlate
+    neighbouring bins, which the bin scatter alone would miss.
+    """
+    v = v[np.isfinite(v)]
+    if v.size < 2:
+        return math.nan
+    sem = float(v.std(ddof=1) / math.sqrt(v.size))
+    k = max(1, int(round(batch_s / dt)))
+    nb = v.size // k
+    if nb >= 3:
+        means = v[:nb * k].reshape(nb, k).mean(axis=1)
+        sem = max(sem, float(means.std(ddof=1) / math.sqrt(nb)))
+    return sem
+
+
+def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
+    if series is None or len(series[0]) == 0:
+        return math.nan
+    v = binned(series[0], series[1], edges)[a:b]
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else math.nan
+
+
+def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> list[PlateauRecord]:
+    """Detect the steady plateaus of one bench recording and average the bench series on each.
+
+    Raises
+    ------
+    McapReadError
+        As :func:`gerotor_twin.report.data.load_bench` (missing topics, corrupt file).
+    """
+    bench = load_bench(path)
+    grid = make_grid(bench, bench.span, settings.grid_s)
+    plateaus = find_plateaus(grid, min_s=settings.min_s, settle_s=settings.settle_s)
+    dt = settings.grid_s
+    edges = np.concatenate([grid.t - dt / 2, [grid.t[-1] + dt / 2]])
+    out = []
+    for p in plateaus:
+        q = grid.q_meas[p.i0:p.i1]
+        q = q[np.isfinite(q)]
+        sem = mean_standard_error(q, dt)
+        out.append(PlateauRecord(
+            bag=str(path), index=p.index, t0_s=p.t0, t1_s=p.t1,
+            omega=float(np.mean(grid.omega[p.i0:p.i1])), p_delivery_pa=float(np.mean(grid.p_delivery[p.i0:p.i1])),
+            p_suction_pa=_mean_on(bench.suction_pressure, edges, p.i0, p.i1),
+            oil_temperature_c=_mean_on(bench.temperature, edges, p.i0, p.i1),
+            flow_m3s=float(q.mean()), flow_sem_m3s=sem, bins=int(q.size)))
+    return out

@@ -1,0 +1,279 @@
+"""Online health of the pump: effective leakage factor, reference efficiency, alarm (no ROS).
+
+Used identically by the node and ``run-bag`` through :class:`~gerotor_twin.twin.core.TwinCore`.
+
+What is estimated
+    ``k``, the ratio of the measured flow loss (theoretical − measured delivery flow) to
+    the flow loss the twin predicts with its configured (calibrated) leakage, by the
+    scalar Kalman filter of :mod:`.leakage_filter` (random-walk drift ``drift_per_sqrt_s``).
+    ``k = 1``: the pump is as calibrated; wear opens the clearances and raises ``k``
+    (the equivalent common clearance factor is ``k^(1/n)``, n the exponent of the flow loss
+    against the clearances at the reference point, :func:`clearance_exponent`; ≈ 3 for
+    Poiseuille leakage).
+When it is updated (robust to ramps and to the flow meter's lag)
+    Once per *settled interval*: the clock is cut into windows of ``window_s``; a
+    window is used only when the model's speed and delivery pressure stayed within
+    ``speed_tol`` (relative) and ``pressure_tol_pa`` of their value at the window start
+    for the whole window *and* for ``settle_s`` before it (≥ 5 flow-meter time
+    constants: the meter has caught up), with at least one revolution summary and
+    ``min_flow_samples`` measured flow samples.  Ramps and steps are ignored.
+    Measurement: y = mean theoretical − mean measured flow; regressor: mean predicted
+    loss / the factor the model runs with; noise variance
+    (``meter_sd_rel`` · q)²/n + (``model_sd_rel`` · q)².
+What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
+    k and its standard deviation, the clearance factor k^(1/n), the volumetric
+    efficiency at the reference point (``reference_rpm``, ``reference_bar``) with k
+    and its standard deviation, the same with k = 1 (calibrated), the residual
+    (measured − predicted mean flow) of this interval, the mean and RMS of the last
+    ``residual_window`` residuals, the normalised innovation, the update count and
+    the status level.
+Status (``/diagnostics`` ``gerotor_twin: health``)
+    STALE until ``min_updates`` updates (no measured flow, or never steady); ERROR when
+    the reference efficiency fell more than ``error_pt`` points below the calibrated
+    one; WARN above ``warn_pt`` points, or when the normalised innovation stayed beyond
+    ``residual_band`` for ``band_updates`` consecutive updates; OK otherwise.
+``adapt``
+    False (default): a pure monitor, the model keeps its configured leakage.  True:
+    after each update that moved k by more than 1 % from the factor in use, the model's
+    tooth-tip and lateral clearances are set to the configured ones × k^(1/n), so the
+    predictions follow the pump (the residuals then stay near zero and the drop shows
+    in the published k and reference efficiency only).
+"""
+from __future__ import annotations
+
+import collections
+import math
+from dataclasses import asdict, dataclass
+
+from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.io import messages as m
+from gerotor_twin.twin import leakage_filter as lf
+from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, OutputMessage
+
+__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS"]
+
+HEALTH_STATUS = "gerotor_twin: health"
+HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
+                 "reference_efficiency_sd", "calibrated_reference_efficiency", "residual_m3s",
+                 "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level")
+NS = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class HealthSettings:
+    """Settings of the health monitor (SI; efficiency thresholds in percentage points)."""
+    enabled: bool = True
+    adapt: bool = False
+    window_s: float = 1.0
+    settle_s: float = 1.0
+    speed_tol: float = 0.01
+    pressure_tol_pa: float = 50_000.0
+    min_flow_samples: int = 3
+    meter_sd_rel: float = 0.005
+    model_sd_rel: float = 0.003
+    drift_per_sqrt_s: float = 0.02
+    initial_sd: float = 0.5
+    warn_pt: float = 2.0
+    error_pt: float = 5.0
+    residual_band: float = 4.0
+    band_updates: int = 5
+    min_updates: int = 3
+    residual_window: int = 20
+    reference_rpm: float = 1500.0
+    reference_bar: float = 20.0
+    reference_oil_c: float = 50.0
+
+    def __post_init__(self):
+        for name, lo, hi in (("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0),
+                             ("pressure_tol_pa", 1.0, 1e7), ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0),
+                             ("drift_per_sqrt_s", 0.0, 10.0), ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0),
+                             ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3), ("reference_rpm", 1.0, 1e5),
+                             ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)):
+            check_range(f"health_{name}", getattr(self, name), lo, hi)
+        for name, lo, hi in (("min_flow_samples", 1, 10**6), ("band_updates", 1, 10**6), ("min_updates", 1, 10**6),
+                             ("residual_window", 1, 10**6)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise InputError(f"health_{name}", v, f"an integer in [{lo}, {hi}]")
+        if self.error_pt < self.warn_pt:
+            raise InputError("health_error_pt", self.error_pt, f"≥ health_warn_pt = {self.warn_pt:g}")
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> float:
+    """Exponent n of the flow loss against a common clearance scale c at the reference point, L ∝ cⁿ [-].
+
+    ≈ 3 for pure Poiseuille leakage; less where filling losses and Couette terms count.  Used to
+    turn a leakage factor k into the clearance factor k^(1/n) (published, and applied by ``adapt``).
+    """
+    from gerotor_twin.model.clearance_scale import scale_clearances
+    base = model.config
+    loss0, _ = reference_loss(model, settings)
+    try:
+        scale_clearances(model, base, step)
+        loss1, _ = reference_loss(model, settings)
+    finally:
+        scale_clearances(model, base, 1.0)
+    n = math.log(loss1 / loss0) / math.log(step) if loss0 > 0 and loss1 > 0 else 3.0
+    return n if math.isfinite(n) and n > 0.5 else 3.0
+
+
+def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
+    """Flow loss and theoretical flow [m³/s] of ``model`` at the reference point (periodic steady state).
+
+    The reference oil temperature is carried in the settings; until the model takes an oil
+    temperature (issue 13) the point is computed at the config's fluid properties.
+    """
+    from gerotor_twin.model.steady import run_steady
+    rpm = min(settings.reference_rpm, model.config.range.max_speed_rpm)
+    res = run_steady(model, rpm, settings.reference_bar)
+    return res.theoretical_flow_m3s - res.mean_delivery_flow_m3s, res.theoretical_flow_m3s
+
+
+@dataclass
+class _Window:
+    start_ns: int
+    revs: int = 0
+    q_pred: float = 0.0
+    q_th: float = 0.0
+    loss: float = 0.0
+
+
+class HealthMonitor:
+    """Settled-interval leakage estimation, reference efficiency and status (see module doc)."""
+
+    def __init__(self, model, settings: HealthSettings | None = None):
+        self.model = model
+        self.settings = s = settings or HealthSettings()
+        self.base_config = model.config
+        self.k_applied = 1.0
+        self.loss_ref, self.qth_ref = reference_loss(model, s) if s.enabled else (math.nan, math.nan)
+        self.exponent = clearance_exponent(model, s) if s.enabled else 3.0
+        self.est = lf.LeakageEstimate(var=s.initial_sd ** 2)
+        self._flow: collections.deque = collections.deque(maxlen=100_000)
+        self._res: collections.deque = collections.deque(maxlen=s.residual_window)
+        self._ref = None            # (omega, p_delivery) the steady stretch started with
+        self._steady_since: int | None = None
+        self._win: _Window | None = None
+        self._out_of_band = 0
+        self.last_residual = math.nan
+        self.history: list[dict] = []
+
+    # ------------------------------------------------------------- inputs
+    def add_flow(self, value_m3s: float, receive_ns: int) -> None:
+        """A measured delivery flow sample [m³/s] (accepted by the input book)."""
+        if math.isfinite(value_m3s):
+            self._flow.append((int(receive_ns), float(value_m3s)))
+
+    def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
+        """After a tick: track steadiness, collect revolution summaries, update at window ends."""
+        if not self.settings.enabled:
+            return []
+        self._track_steady(now_ns, inputs)
+        w = self._win
+        if w is None:
+            self._win = _Window(now_ns)
+            return []
+        for msg in messages:
+            if msg.topic == FLOW_SUMMARY and msg.stamp_ns >= w.start_ns:
+                q, qth, loss, _eta = msg.msg["data"][:4]
+                w.revs += 1
+                w.q_pred += q
+                w.q_th += qth
+                w.loss += loss
+        if now_ns - w.start_ns < self.settings.window_s * NS:
+            return []
+        self._win = _Window(now_ns)
+        return self._close(w, now_ns)
+
+    def _track_steady(self, now_ns: int, inputs) -> None:
+        s = self.settings
+        if inputs is None:
+            self._ref, self._steady_since = None, None
+            return
+        if self._ref is not None:
+            w0, p0 = self._ref
+            if abs(inputs.omega - w0) <= s.speed_tol * max(abs(w0), 1.0) and abs(inputs.p_delivery - p0) <= s.pressure_tol_pa:
+                return
+        self._ref, self._steady_since = (inputs.omega, inputs.p_delivery), now_ns
+
+    # ------------------------------------------------------------- update
+    def _close(self, w: _Window, end_ns: int) -> list[OutputMessage]:
+        s = self.settings
+        if self._steady_since is None or w.start_ns - self._steady_since < s.settle_s * NS or w.revs == 0:
+            return []
+        samples = [v for t, v in self._flow if w.start_ns <= t < end_ns]
+        while self._flow and self._flow[0][0] < w.start_ns:
+            self._flow.popleft()
+        if len(samples) < s.min_flow_samples:
+            return []
+        q_meas = sum(samples) / len(samples)
+        q_pred, q_th, loss = w.q_pred / w.revs, w.q_th / w.revs, w.loss / w.revs
+        r = (s.meter_sd_rel * q_meas) ** 2 / len(samples) + (s.model_sd_rel * q_meas) ** 2
+        est = lf.predict(self.est, end_ns / NS, s.drift_per_sqrt_s)
+        self.est = lf.update(est, q_th - q_meas, loss / self.k_applied, max(r, 1e-18))
+        self.last_residual = q_meas - q_pred
+        self._res.append(self.last_residual)
+        self._out_of_band = self._out_of_band + 1 if abs(self.est.innovation) > s.residual_band else 0
+        if s.adapt and self.est.updates >= s.min_updates and abs(self.est.k / self.k_applied - 1) > 0.01:
+            self._adapt(self.est.k)
+        values = self.values()
+        self.history.append({"t_ns": end_ns, **dict(zip(HEALTH_FIELDS, values))})
+        return [OutputMessage(HEALTH_TOPIC, m.FLOAT64_MULTIARRAY, end_ns,
+                              m.float64_multiarray(values, (",".join(HEALTH_FIELDS),)))]
+
+    def _adapt(self, k: float) -> None:
+        from gerotor_twin.model.clearance_scale import scale_clearances
+        self.k_applied = max(k, 1e-3)
+        scale_clearances(self.model, self.base_config, self.k_applied ** (1.0 / self.exponent))
+
+    # ------------------------------------------------------------- figures
+    def reference_efficiency(self, k: float) -> float:
+        """Volumetric efficiency at the reference point with leakage factor ``k`` [-]."""
+        return 1.0 - k * self.loss_ref / self.qth_ref
+
+    def drop_pt(self) -> float:
+        """Fall of the reference efficiency from the calibrated value [percentage points]."""
+        return 100.0 * (self.reference_efficiency(1.0) - self.reference_efficiency(self.est.k))
+
+    def level(self) -> int:
+        s = self.settings
+        if self.est.updates < s.min_updates:
+            return m.DIAG_STALE
+        if self.drop_pt() > s.error_pt:
+            return m.DIAG_ERROR
+        if self.drop_pt() > s.warn_pt or self._out_of_band >= s.band_updates:
+            return m.DIAG_WARN
+        return m.DIAG_OK
+
+    def values(self) -> list[float]:
+        """The :data:`HEALTH_FIELDS` values now."""
+        e = self.est
+        res = list(self._res)
+        mean = sum(res) / len(res) if res else math.nan
+        rms = math.sqrt(sum(v * v for v in res) / len(res)) if res else math.nan
+        return [e.k, e.sd, max(e.k, 0.0) ** (1 / self.exponent), self.reference_efficiency(e.k), e.sd * self.loss_ref / self.qth_ref,
+                self.reference_efficiency(1.0), self.last_residual, mean, rms, e.innovation, float(e.updates),
+                float(self.level())]
+
+    def status(self) -> dict:
+        """``diagnostic_msgs/DiagnosticStatus`` dict ``gerotor_twin: health``."""
+        s = self.settings
+        lvl = self.level()
+        v = dict(zip(HEALTH_FIELDS, self.values()))
+        if lvl == m.DIAG_STALE:
+            text = (f"learning: {self.est.updates} of {s.min_updates} settled intervals with measured flow "
+                    "(needs bench/delivery_flow and steady operation)")
+        else:
+            text = (f"leakage factor {v['leakage_factor']:.3f} ± {v['leakage_factor_sd']:.3f}; efficiency at "
+                    f"{s.reference_rpm:g} rpm / {s.reference_bar:g} bar {100 * v['reference_efficiency']:.2f} % "
+                    f"({self.drop_pt():+.2f} pt below calibrated; WARN > {s.warn_pt:g}, ERROR > {s.error_pt:g})")
+            if self._out_of_band >= s.band_updates:
+                text += f"; residual outside ±{s.residual_band:g} σ for {self._out_of_band} intervals"
+        vals = {k: f"{x:.6g}" for k, x in v.items()}
+        vals.update({"adapt": str(s.adapt).lower(), "reference_rpm": f"{s.reference_rpm:g}",
+                     "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
+                     "drop_pt": f"{self.drop_pt():.3f}"})
+        return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)

@@ -1,0 +1,155 @@
+"""Offline calibration (`gerotor-twin calibrate`): identifiability analysis, known-truth fits, outputs, bad input.
+
+Known truth: the bench emulator (`synth-bench`) with chosen clearance factors, its sensor
+noise and lags, and the twin's own outer-gear model (mobility) so that the only
+differences left are noise, sensor dynamics and the emulator's finer numerics.
+"""
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from gerotor_twin.bench_emulator import BenchSpec, synthesize
+from gerotor_twin.bench_emulator.profiles import Profile, Segment
+from gerotor_twin.cli import main
+from gerotor_twin.config import load_config
+from gerotor_twin.errors import InputError
+from gerotor_twin.offline import identifiability as ident
+from gerotor_twin.offline.calibration_run import calibrate_bags, fitted_config
+from gerotor_twin.offline.fit_model import parse_params
+from gerotor_twin.offline.plateaus import DetectorSettings, bench_plateaus
+
+#: five plateaus over speed and pressure, 3.6 s each, joined by 0.4 s ramps (19.6 s)
+PROFILE = Profile("calib-test", (
+    Segment(3.6, 1000, 5), Segment(0.4, 1000, 24, ramp=True), Segment(3.6, 1000, 24),
+    Segment(0.4, 2600, 24, ramp=True), Segment(3.6, 2600, 24), Segment(0.4, 2600, 6, ramp=True),
+    Segment(3.6, 2600, 6), Segment(0.4, 1800, 15, ramp=True), Segment(3.6, 1800, 15)), "calibration test")
+DETECTOR = DetectorSettings(settle_s=1.0, min_s=1.0)  # 1 s = 5 flow-meter time constants
+FACTORS = (0.9, 1.2, 1.35)
+
+
+@pytest.fixture(scope="module")
+def bags(tmp_path_factory):
+    d = tmp_path_factory.mktemp("calib")
+    out = {}
+    for i, f in enumerate(FACTORS):
+        p = d / f"bench_f{f:g}.mcap"
+        truth = synthesize(PROFILE, p, BenchSpec(seed=1 + i, bearing="mobility", clearance_factor=f), progress=None)
+        out[f] = (p, truth)
+    return out
+
+
+@pytest.fixture(scope="module")
+def fits(bags):
+    return {f: calibrate_bags([p], params=("tip", "lateral"), holdout=2, jobs=2, detector=DETECTOR)
+            for f, (p, _) in bags.items()}
+
+
+def test_identifiability_closed_form():
+    """Closed form: parallel Jacobian columns cannot be separated (grouped), orthogonal ones can."""
+    j = np.array([[1.0, 2.0], [2.0, 4.0], [3.0, 6.0001]])
+    a = ident.analyse(j, ("a", "b"))
+    assert a["unseparable"] == [("a", "b")] and a["groups"] == [["a", "b"]]
+    assert a["combinations"][:, 0].sum() == pytest.approx(1.0)
+    # columns 1 : 2 → the data fix 1·x_a + 2·x_b, normalised to sum 1
+    assert a["combinations"][:, 0] == pytest.approx([1 / 3, 2 / 3], rel=1e-3)
+    b = ident.analyse(np.array([[1.0, 0.0], [0.0, 3.0], [1.0, 1.0]]), ("a", "b"))
+    assert b["unseparable"] == [] and b["groups"] == [["a"], ["b"]]
+    c = ident.analyse(np.array([[1.0, 0.0], [2.0, 0.0]]), ("a", "b"))
+    assert c["insensitive"] == ["b"] and c["groups"] == [["a"]]
+
+
+def test_covariance_closed_form():
+    """Closed form: linear model, unit weights: cov = (JᵀJ)⁻¹ when χ²/dof ≤ 1, scaled by it otherwise."""
+    j = np.array([[1.0], [1.0], [1.0], [1.0]])
+    cov, s2, dof = ident.covariance(j, np.array([0.1, -0.1, 0.1, -0.1]))
+    assert (s2, dof) == (1.0, 3) and cov[0, 0] == pytest.approx(0.25)
+    cov, s2, _ = ident.covariance(j, np.array([3.0, -3.0, 3.0, -3.0]))
+    assert s2 == pytest.approx(12.0) and cov[0, 0] == pytest.approx(3.0)
+
+
+def test_plateaus_found_with_oil_temperature(bags):
+    """Behaviour: all five plateaus, at the set speeds, each carrying its oil temperature."""
+    recs = bench_plateaus(bags[FACTORS[0]][0], DETECTOR)
+    assert [round(r.rpm, -1) for r in recs] == [1000, 1000, 2600, 2600, 1800]
+    assert all(39.9 < r.oil_temperature_c < 42.2 for r in recs)
+    assert all(r.flow_sem_m3s > 0 for r in recs)
+
+
+@pytest.mark.parametrize("factor", FACTORS)
+def test_recovers_common_clearance_factor(fits, factor):
+    """Golden (known truth): the emulated factor lies inside the reported 95 % interval of the identifiable
+    combination, and the interval is informative (narrower than ±3 %)."""
+    f = fits[factor]["fit"]
+    assert f["unseparable"] == [["tip", "lateral"]]     # as with the paper's tables
+    (c,) = f["combinations"]
+    lo, hi = c["factor_ci95"]
+    assert lo <= factor <= hi, (factor, c)
+    assert hi / lo < 1.06
+
+
+@pytest.mark.parametrize("factor", FACTORS)
+def test_holdout_efficiency_error(fits, factor):
+    """Behaviour: fitted on plateaus 1, 3, 5, the held-out plateaus 2 and 4 have |η error| ≤ 0.5 pt, and
+    the prior's error there was larger (the fit did something)."""
+    ho = fits[factor]["holdout"]
+    assert [h.rsplit("#", 1)[1] for h in ho["held_out"]] == ["2", "4"]
+    assert ho["eta_error"]["max_abs"] <= 0.005
+    assert ho["eta_error_prior"]["max_abs"] > 2 * ho["eta_error"]["max_abs"]
+
+
+def test_written_config_loads_and_reproduces(fits, tmp_path):
+    """Behaviour: the written YAML passes the loader, keeps the provenance and holds the fitted values."""
+    res = fits[FACTORS[1]]
+    p = tmp_path / "fitted.yaml"
+    p.write_text(yaml.safe_dump(fitted_config(res)))
+    cfg = load_config(p)
+    prior = load_config()
+    fac = res["fit"]["combinations"][0]["factor"]
+    assert cfg.clearances.tooth_tip_m == pytest.approx(prior.clearances.tooth_tip_m * fac, rel=1e-9)
+    assert cfg.clearances.lateral_m == pytest.approx(prior.clearances.lateral_m * fac, rel=1e-9)
+    prov = cfg.calibration
+    assert prov["bags"] == res["bags"] and prov["unseparable"] == [["tip", "lateral"]]
+    assert prov["residuals"]["eta_max_abs"] < 0.005 and "date" in prov
+
+
+def test_cli_end_to_end(bags, tmp_path, capsys):
+    """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability."""
+    bag = bags[FACTORS[0]][0]
+    out, js, rep = tmp_path / "p.yaml", tmp_path / "r.json", tmp_path / "r.html"
+    assert main(["calibrate", "--bench", str(bag), "-o", str(out), "--params", "lateral", "--json", str(js),
+                 "--report", str(rep), "--settle-s", "1.0", "--min-plateau-s", "1.0", "--jobs", "1",
+                 "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "hold-out" in text and "wrote" in text
+    r = json.loads(js.read_text())
+    assert r["params"] == ["lateral"] and r["fit"]["unseparable"] == []
+    assert "<img" in rep.read_text() and load_config(out).calibration["model"] == "mobility"
+    assert main(["calibrate", "--bench", str(bag), "-o", str(out)]) == 2      # exists, no --overwrite
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["--params", "tip,bogus"], "--params"), (["--params", ""], "--params"), (["--model", "x"], "--model"),
+    (["--holdout", "1"], "--holdout"), (["--jobs", "0"], "--jobs"), (["--settle-s", "nan"], "--settle-s")])
+def test_bad_input_one_line(bags, tmp_path, capsys, argv, field):
+    """Bad input: one line naming the field, exit 2, nothing written."""
+    out = tmp_path / "p.yaml"
+    rc = main(["calibrate", "--bench", str(bags[FACTORS[0]][0]), "-o", str(out), "--quiet"] + argv)
+    err = capsys.readouterr().err
+    assert rc == 2 and field in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_missing_bag_and_bad_calibration_block(tmp_path, capsys):
+    """Bad input: an absent recording and a non-mapping provenance block are named."""
+    assert main(["calibrate", "--bench", str(tmp_path / "none.mcap"), "-o", str(tmp_path / "p.yaml")]) == 2
+    assert "none.mcap" in capsys.readouterr().err
+    raw = load_config().to_dict()
+    raw["calibration"] = "yesterday"
+    p = tmp_path / "c.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    with pytest.raises(InputError, match="calibration"):
+        load_config(p)
+    with pytest.raises(InputError, match="--params"):
+        parse_params("tip,tip")

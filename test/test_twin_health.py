@@ -1,0 +1,140 @@
+"""Online health (twin/health.py, leakage_filter.py): the filter, the settled-interval gate, status, adapt, settings."""
+import math
+
+import pytest
+
+from gerotor_twin.errors import InputError
+from gerotor_twin.io import messages as m
+from gerotor_twin.model.pump import Inputs
+from gerotor_twin.ros.params import PARAMETERS, health_settings
+from gerotor_twin.twin import leakage_filter as lf
+from gerotor_twin.twin.health import HEALTH_FIELDS, HEALTH_STATUS, HealthMonitor, HealthSettings
+from gerotor_twin.twin.outputs import HEALTH, summary
+
+NS = 1_000_000_000
+
+
+def test_kalman_constant_parameter_closed_form():
+    """Closed form: without drift, n equal measurements give the precision-weighted mean and
+    variance 1/(1/P0 + n H²/R)."""
+    est = lf.LeakageEstimate(k=1.0, var=0.25)
+    h, r, ys = 2.0, 0.01, [2.6, 2.8, 2.7, 2.5]
+    for i, y in enumerate(ys):
+        est = lf.update(lf.predict(est, float(i), 0.0), y, h, r)
+    prec = 1 / 0.25 + len(ys) * h * h / r
+    assert est.var == pytest.approx(1 / prec, rel=1e-12)
+    assert est.k == pytest.approx((1.0 / 0.25 + sum(h * y for y in ys) / r) / prec, rel=1e-12)
+    assert est.updates == 4
+
+
+def test_kalman_random_walk_variance_grows_by_drift():
+    """Closed form: the prediction adds drift² · Δt to the variance."""
+    est = lf.predict(lf.LeakageEstimate(var=0.01, t_s=2.0), 6.0, 0.05)
+    assert est.var == pytest.approx(0.01 + 0.05 ** 2 * 4.0)
+
+
+class Feed:
+    """Drives a HealthMonitor the way TwinCore does: ticks of 10 ms, a revolution summary every
+    40 ms, a flow-meter sample every 50 ms (a pump whose leakage is ``k`` × the model's)."""
+
+    def __init__(self, monitor, qth=5e-4, loss=1e-4):
+        self.mon, self.qth, self.loss, self.t = monitor, qth, loss, 0
+        self.messages = []
+
+    def run(self, seconds, k, omega=157.0, p=2.1e6, meter=None):
+        end = self.t + int(seconds * NS)
+        while self.t < end:
+            self.t += 10_000_000
+            msgs = []
+            if self.t % 40_000_000 == 0:
+                msgs.append(summary(self.t, [self.qth - self.loss, self.qth, self.loss, 1 - self.loss / self.qth]))
+            if self.t % 50_000_000 == 0:
+                self.mon.add_flow(meter(self.t) if meter else self.qth - k * self.loss, self.t)
+            w = omega(self.t) if callable(omega) else omega
+            self.messages += self.mon.observe(self.t, Inputs(w, 1e5, p), msgs)
+        return self
+
+
+@pytest.fixture()
+def monitor(fixed_model):
+    return HealthMonitor(fixed_model, HealthSettings())
+
+
+def test_tracks_leakage_factor_on_steady_operation(monitor):
+    """Behaviour: steady operation with 30 % more leakage than the model: k → 1.30 within 2 σ, status follows
+    the reference-efficiency drop (STALE while learning, then a level from the thresholds)."""
+    f = Feed(monitor).run(0.5, 1.3)
+    assert monitor.level() == m.DIAG_STALE
+    f.run(12.0, 1.3)
+    est = monitor.est
+    assert abs(est.k - 1.3) < 2 * est.sd + 1e-3 and est.updates >= 8
+    drop = 100 * 0.3 * monitor.loss_ref / monitor.qth_ref
+    assert monitor.drop_pt() == pytest.approx(drop, abs=0.2)
+    want = m.DIAG_ERROR if drop > 5 else m.DIAG_WARN if drop > 2 else m.DIAG_OK
+    assert monitor.level() == want
+    msg = f.messages[-1]
+    assert msg.topic == HEALTH and msg.msg["layout"]["dim"][0]["label"] == ",".join(HEALTH_FIELDS)
+    v = dict(zip(HEALTH_FIELDS, msg.msg["data"]))
+    assert v["clearance_factor"] == pytest.approx(v["leakage_factor"] ** (1 / monitor.exponent))
+    st = monitor.status()
+    assert st["name"] == HEALTH_STATUS and st["level"] == want
+
+
+def test_ramps_and_meter_lag_are_not_used(monitor):
+    """Behaviour: during a speed ramp no update happens; after the ramp the first settle_s (meter still
+    lagging: it reads a wrong flow then) are ignored too, so the estimate is that of the true pump."""
+    f = Feed(monitor)
+    f.run(6.0, 1.0, omega=lambda t: 100.0 + 10.0 * t / NS)       # 10 rad/s² ramp all along
+    assert monitor.est.updates == 0
+    t_ramp_end = f.t
+    lagging = lambda t: f.qth - (1.0 if t - t_ramp_end > 0.9 * NS else 3.0) * f.loss
+    f.run(6.0, 1.0, omega=160.0, meter=lagging)
+    assert monitor.est.updates >= 3
+    assert abs(monitor.est.k - 1.0) < 0.02
+
+
+def test_no_flow_meter_stays_stale(monitor):
+    """Behaviour: without measured flow the monitor never claims health: STALE, message says why."""
+    f = Feed(monitor)
+    f.mon.add_flow = lambda *a: None
+    f.run(5.0, 1.0)
+    st = monitor.status()
+    assert st["level"] == m.DIAG_STALE and "delivery_flow" in st["message"]
+
+
+def test_adapt_feeds_back_into_model(fixed_model):
+    """Behaviour: adapt=true gives the model clearances × k^(1/n) (n: loss exponent at the reference point,
+    between 1 and 3); adapt=false leaves them alone."""
+    from gerotor_twin.config import load_config
+    from gerotor_twin.model.pump import PumpModel
+    model = PumpModel(load_config(), "fixed")
+    tip0 = model.config.clearances.tooth_tip_m
+    mon = HealthMonitor(model, HealthSettings(adapt=True))
+    Feed(mon).run(8.0, 1.3)
+    assert 1.0 < mon.exponent <= 3.2
+    c = mon.k_applied ** (1 / mon.exponent)
+    assert mon.k_applied > 1.2
+    assert model.config.clearances.tooth_tip_m == pytest.approx(tip0 * c)
+    assert model.kernel.pc.tip_clearance == pytest.approx(tip0 * c)
+    mon2 = HealthMonitor(fixed_model, HealthSettings())
+    Feed(mon2).run(8.0, 1.3)
+    assert fixed_model.config.clearances.tooth_tip_m == tip0
+
+
+@pytest.mark.parametrize("kw, field", [({"warn_pt": -1.0}, "health_warn_pt"),
+                                       ({"warn_pt": 3.0, "error_pt": 2.0}, "health_error_pt"),
+                                       ({"window_s": math.nan}, "health_window_s"),
+                                       ({"min_updates": 0}, "health_min_updates")])
+def test_bad_settings_named(kw, field):
+    """Bad input: each bad setting raises one InputError naming the node parameter."""
+    with pytest.raises(InputError, match=field):
+        HealthSettings(**kw)
+
+
+def test_node_parameters_map_onto_settings():
+    """Behaviour: every health_* node parameter is a HealthSettings field with the same default."""
+    prm = {p.name: p.default for p in PARAMETERS}
+    hs = health_settings(prm)
+    for p in PARAMETERS:
+        if p.name.startswith("health_"):
+            assert getattr(hs, p.name[len("health_"):]) == p.default
