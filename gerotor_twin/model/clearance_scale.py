@@ -4,7 +4,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ..config import PumpConfig
-from .params import kernel_model
 
 __all__ = ["scale_clearances"]
 
@@ -25,5 +24,4 @@ def scale_clearances(model, base_config: PumpConfig, factor: float) -> None:
     clear = replace(c, tooth_tip_m=c.tooth_tip_m * factor, lateral_m=c.lateral_m * factor)
     cfg = replace(base_config, clearances=clear, gears=replace(base_config.gears, tip_clearance=clear.tooth_tip_m))
     tables = replace(model.tables, tip_clearance=clear.tooth_tip_m)
-    model.kernel = kernel_model(cfg, tables, model.lateral)
-    model.config, model.geometry, model.tables = cfg, cfg.gears, tables
+    model.rebuild_kernel(cfg, tables)

@@ -121,6 +121,15 @@ class PumpModel:
             self._make_bearing(self.kernel.pc.viscosity)
         return None if log_density is None else convert_log_density(log_density, old, self.kernel.eos)
 
+    def rebuild_kernel(self, config: PumpConfig, tables: GeometryTables) -> None:
+        """Take ``config``/``tables`` (e.g. scaled clearances): the kernel as built in ``__init__``
+        (micro-motion choices), at the oil temperature the model is at; the state stays valid."""
+        km = _with_micro_motion(kernel_model(config, tables, self.lateral), config, self.bearing_name)
+        if config.oil is not None and self.temperature_k != config.reference_temperature_k:
+            km = at_temperature(km, config, self.lateral, self.temperature_k)
+        self.kernel = km
+        self.config, self.geometry, self.tables = config, config.gears, tables
+
     @property
     def restriction_mode(self) -> bool:
         return self.config.boundary.mode == "restriction"

@@ -26,7 +26,7 @@ import numpy as np
 from ..config import PumpConfig, parse_config
 from ..errors import InputError
 from ..geometry.tables import cached_tables
-from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
+from ..units import celsius_to_kelvin, pa_abs_to_bar_gauge, rad_s_to_rpm
 
 __all__ = ["FitParameter", "PARAMETERS", "parse_params", "apply", "PlateauTask", "plateau_flow"]
 
@@ -88,7 +88,7 @@ class PlateauTask:
     omega: float                 #: [rad/s]
     p_suction_pa: float          #: [Pa abs]; NaN: the config's suction pressure
     p_delivery_pa: float         #: [Pa abs]
-    oil_temperature_c: float     #: [°C]; carried, see :func:`plateau_flow`
+    oil_temperature_c: float     #: plateau mean oil temperature [°C] (NaN: none recorded)
 
 
 _TABLES: dict[str, object] = {}
@@ -119,9 +119,8 @@ def plateau_flow(task: PlateauTask) -> dict:
 
     Notes
     -----
-    The plateau's oil temperature is carried in ``task.oil_temperature_c`` but not yet used:
-    until the model takes the oil temperature (issue 13), the plateau is simulated at the
-    config's fluid properties.  Once it does, pass it here (one line, marked below).
+    The plateau is simulated at its mean oil temperature ``task.oil_temperature_c`` (the
+    config's reference temperature when the bag has none).
     """
     from ..model.pump import PumpModel
     from ..model.steady import run_steady
@@ -130,8 +129,9 @@ def plateau_flow(task: PlateauTask) -> dict:
     model = PumpModel(cfg, task.bearing, tables=_tables(cfg, task.table_tip_m))
     p_atm = cfg.fluid.atmospheric_pa
     ps = None if not math.isfinite(task.p_suction_pa) else task.p_suction_pa
-    # issue 13: hand task.oil_temperature_c to the model here once it accepts an oil temperature
+    t_c = task.oil_temperature_c
+    t_oil = celsius_to_kelvin(t_c) if t_c is not None and math.isfinite(t_c) else None
     res = run_steady(model, rad_s_to_rpm(task.omega), pa_abs_to_bar_gauge(task.p_delivery_pa, p_atm),
-                     max_revolutions=60, rtol=1e-6, p_suction=ps)
+                     max_revolutions=60, rtol=1e-6, p_suction=ps, oil_temperature=t_oil)
     return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,
             "revolutions": res.revolutions, "periodicity_error": res.periodicity_error}

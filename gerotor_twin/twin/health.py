@@ -123,12 +123,17 @@ def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> fl
 def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
     """Flow loss and theoretical flow [m³/s] of ``model`` at the reference point (periodic steady state).
 
-    The reference oil temperature is carried in the settings; until the model takes an oil
-    temperature (issue 13) the point is computed at the config's fluid properties.
+    Computed at the reference oil temperature of the settings (``reference_oil_c``).
     """
+    from gerotor_twin.units import celsius_to_kelvin
     from gerotor_twin.model.steady import run_steady
     rpm = min(settings.reference_rpm, model.config.range.max_speed_rpm)
-    res = run_steady(model, rpm, settings.reference_bar)
+    t_model = getattr(model, "temperature_k", None)
+    try:
+        res = run_steady(model, rpm, settings.reference_bar, oil_temperature=celsius_to_kelvin(settings.reference_oil_c))
+    finally:
+        if t_model is not None:
+            model.set_temperature(t_model)          # the live model's properties stay where they were
     return res.theoretical_flow_m3s - res.mean_delivery_flow_m3s, res.theoretical_flow_m3s
 
 
