@@ -86,15 +86,19 @@ def test_spec_errors_are_one_line_naming_field_value_range(tmp_path, capsys, bod
     assert not (tmp_path / "r").exists()
 
 
-def test_oil_temperature_is_refused_until_the_model_takes_it():
-    """Behaviour: the operating point carries the oil temperature; this build's model has no such input yet."""
+def test_oil_temperature_reaches_the_model_or_is_refused():
+    """Behaviour: the operating point carries the oil temperature.  Without a temperature input in the
+    model it is a SPEC error; with one, hotter (thinner) oil leaks more: lower volumetric efficiency."""
     from gerotor_twin.offline.sweep_point import temperature_keyword
-    body = {"operating": {"oil_temperature_c": 60}}
+    body = {"model": "fixed", "revolutions": 6, "set": COARSE, "parameters": {"operating.oil_temperature_c": [30, 80]}}
     if temperature_keyword() is None:
-        with pytest.raises(InputError, match="operating.oil_temperature_c = 60 is invalid; allowed: unset"):
+        with pytest.raises(InputError, match="operating.oil_temperature_c = 30 is invalid; allowed: unset"):
             parse_spec(body)
-    else:
-        assert parse_spec(body).operating["oil_temperature_c"] == 60
+        return
+    spec = parse_spec(body)
+    cold, hot = (evaluate_point(spec.task(), p) for p in spec.points())
+    assert cold["status"] == hot["status"] == "ok"
+    assert hot["outputs"]["volumetric_efficiency"] < cold["outputs"]["volumetric_efficiency"]
 
 
 # ------------------------------------------------------------------ designs

@@ -46,8 +46,8 @@ OUTPUTS = (
     "counts.cavitation_clamps",
 )
 
-#: names the oil-temperature input may have in :func:`run_steady` (issue 13 adds it; none today)
-_TEMPERATURE_KEYWORDS = ("oil_temperature_k", "temperature_k")
+#: names the oil-temperature input [K] may have in :func:`run_steady` (issue 13 adds ``oil_temperature``)
+_TEMPERATURE_KEYWORDS = ("oil_temperature", "oil_temperature_k", "temperature_k")
 
 
 def temperature_keyword() -> str | None:
