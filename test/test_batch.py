@@ -74,17 +74,58 @@ def test_fleet_rows_are_the_reports_figures(local_fleet, bags, tmp_path):
 
 
 def test_bad_arguments_are_one_line(tmp_path, bags, capsys):
-    """Behaviour: no recording, an unknown model, --calibrate in this build: one line each, exit 2."""
+    """Behaviour: no recording, an unknown model: one line each, exit 2."""
     cases = [(["batch", str(tmp_path / "nothing*.mcap"), "-o", str(tmp_path / "o")],
               "BAG_DIR_OR_GLOB = "),
-             (["batch", str(bags), "-o", str(tmp_path / "o"), "--model", "rigid"], "--model = 'rigid' is invalid"),
-             (["batch", str(bags), "-o", str(tmp_path / "o"), "--calibrate"],
-              "--calibrate = True is invalid; allowed: absent: calibration is not available in this build")]
+             (["batch", str(bags), "-o", str(tmp_path / "o"), "--model", "rigid"], "--model = 'rigid' is invalid")]
     for argv, needle in cases:
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert err.startswith("error: ") and "\n" not in err and needle in err, err
     assert not (tmp_path / "o").exists()
+
+
+def test_fleet_rows_carry_health(local_fleet):
+    """Behaviour: a good row carries the health monitor's last state of its twin log (level, k ± sd) as
+    `gerotor-twin health` reads it; CSV and HTML show it."""
+    from gerotor_twin.offline.health_log import LEVELS, load_health
+    r = _rows(local_fleet)["bench_1"]
+    t, hist = load_health(r["twin"])
+    h = r["health"]
+    assert h["level"] == LEVELS[int(hist[-1]["level"])] and h["updates"] == len(hist)
+    assert h["leakage_factor"] == hist[-1]["leakage_factor"] and h["leakage_factor_sd"] > 0
+    with open(local_fleet / "fleet.csv") as fh:
+        table = {row["name"].rsplit("-", 1)[0]: row for row in csv.DictReader(fh)}
+    assert table["bench_1"]["health"] == h["level"]
+    assert float(table["bench_1"]["health_leakage_factor"]) == h["leakage_factor"]
+    assert f"<b>{h['level']}</b>: k = {h['leakage_factor']:.3f}" in (local_fleet / "fleet.html").read_text()
+
+
+@pytest.mark.slow
+def test_fleet_calibrate_recovers_the_emulated_clearances(bags, tmp_path):
+    """Golden (known truth): with --calibrate every good recording gets its fitted pump config, and the
+    fitted clearance combination's 95 % interval holds the emulated pump's factor (BenchSpec default,
+    same fixed-centre model as the twin); the corrupt file stays a failed row; a rerun without
+    --calibrate into the same directory is refused."""
+    from gerotor_twin.bench_emulator import BenchSpec
+    from gerotor_twin.config import load_config
+    out = tmp_path / "cal"
+    tau = str(BenchSpec().temperature_tau_s)           # the emulated thermometer's lag, undone
+    assert main(["batch", str(bags), "-o", str(out), "--model", "fixed", "--workers", "2", "--calibrate",
+                 "--oil-sensor-tau", tau, "--quiet"]) == 0
+    rows = _rows(out)
+    assert rows["corrupt"]["status"] == "failed"
+    truth = BenchSpec().clearance_factor
+    for name in ("bench_0", "bench_1"):
+        cal = rows[name]["calibration"]
+        assert "error" not in cal, cal
+        lo, hi = cal["combinations"][0]["factor_ci95"]
+        assert lo <= truth <= hi, (name, cal)
+        assert load_config(cal["config"]).calibration["bags"] == [rows[name]["bag"]]
+    with open(out / "fleet.csv") as fh:
+        assert all(row["fit_factor"] for row in csv.DictReader(fh) if row["status"] == "ok")
+    assert "fitted clearance factor" in (out / "fleet.html").read_text()
+    assert main(["batch", str(bags), "-o", str(out), "--model", "fixed", "--oil-sensor-tau", tau]) == 2
 
 
 @pytest.mark.slow

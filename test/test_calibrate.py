@@ -25,7 +25,8 @@ PROFILE = Profile("calib-test", (
     Segment(3.6, 1000, 5), Segment(0.4, 1000, 24, ramp=True), Segment(3.6, 1000, 24),
     Segment(0.4, 2600, 24, ramp=True), Segment(3.6, 2600, 24), Segment(0.4, 2600, 6, ramp=True),
     Segment(3.6, 2600, 6), Segment(0.4, 1800, 15, ramp=True), Segment(3.6, 1800, 15)), "calibration test")
-DETECTOR = DetectorSettings(settle_s=1.0, min_s=1.0)  # 1 s = 5 flow-meter time constants
+#: 1 s = 5 flow-meter time constants; the emulated thermometer's lag undone (the oil warms during the run)
+DETECTOR = DetectorSettings(settle_s=1.0, min_s=1.0, oil_sensor_tau_s=BenchSpec().temperature_tau_s)
 FACTORS = (0.9, 1.2, 1.35)
 
 
@@ -79,14 +80,20 @@ def test_plateaus_found_with_oil_temperature(bags):
 
 @pytest.mark.parametrize("factor", FACTORS)
 def test_recovers_common_clearance_factor(fits, factor):
-    """Golden (known truth): the emulated factor lies inside the reported 95 % interval of the identifiable
-    combination, and the interval is informative (narrower than ±3 %)."""
+    """Golden (known truth): both clearances were scaled by ``factor``, so every combination the analysis
+    calls identifiable (normalised: coefficients sum to 1, as ln of a common factor) has ``factor`` inside
+    its reported 95 % interval, and the best-determined one is informative (narrower than ±3 %).
+    Whether tip and lateral come out separable depends on the plateaus (|ρ| near the 0.98 limit for
+    these five); the truth must be covered either way."""
     f = fits[factor]["fit"]
-    assert f["unseparable"] == [["tip", "lateral"]]     # as with the paper's tables
-    (c,) = f["combinations"]
-    lo, hi = c["factor_ci95"]
-    assert lo <= factor <= hi, (factor, c)
-    assert hi / lo < 1.06
+    assert f["unseparable"] in ([], [["tip", "lateral"]])
+    combos = f["combinations"]
+    assert combos
+    for c in combos:
+        assert sum(c["coefficients"].values()) == pytest.approx(1.0)
+        lo, hi = c["factor_ci95"]
+        assert lo <= factor <= hi, (factor, c)
+    assert min(c["factor_ci95"][1] / c["factor_ci95"][0] for c in combos) < 1.06
 
 
 @pytest.mark.parametrize("factor", FACTORS)
@@ -106,11 +113,12 @@ def test_written_config_loads_and_reproduces(fits, tmp_path):
     p.write_text(yaml.safe_dump(fitted_config(res)))
     cfg = load_config(p)
     prior = load_config()
-    fac = res["fit"]["combinations"][0]["factor"]
-    assert cfg.clearances.tooth_tip_m == pytest.approx(prior.clearances.tooth_tip_m * fac, rel=1e-9)
-    assert cfg.clearances.lateral_m == pytest.approx(prior.clearances.lateral_m * fac, rel=1e-9)
+    fitted = {p["name"]: p["value"] for p in res["fit"]["parameters"]}
+    assert cfg.clearances.tooth_tip_m == pytest.approx(fitted["tip"], rel=1e-9)
+    assert cfg.clearances.lateral_m == pytest.approx(fitted["lateral"], rel=1e-9)
+    assert fitted["lateral"] != pytest.approx(prior.clearances.lateral_m, rel=1e-3)    # the fit moved it
     prov = cfg.calibration
-    assert prov["bags"] == res["bags"] and prov["unseparable"] == [["tip", "lateral"]]
+    assert prov["bags"] == res["bags"] and prov["unseparable"] == res["fit"]["unseparable"]
     assert prov["residuals"]["eta_max_abs"] < 0.005 and "date" in prov
 
 

@@ -33,7 +33,38 @@ def test_oil_temperature_sources():
     (level, text), = ev.pop()
     assert level == 1 and "oil_temperature stale" in text and "40 °C" in text
     assert ot.report() == {"oil_temperature_c": pytest.approx(40.0), "oil_temperature_source": STALE,
-                           "oil_temperature_fallbacks": 1}
+                           "oil_temperature_fallbacks": 1, "oil_temperature_lead_k": 0.0}
+
+
+@pytest.mark.parametrize("tau", [1.0, 3.0, 10.0])
+def test_thermometer_lag_compensation_on_a_ramp(tau):
+    """Closed form: a first-order sensor (τ) on a ramp T = T0 + r·t reads T0 + r·(t − τ(1 − e^(−t/τ)));
+    once e^(−t/τ) is negligible the compensated value T_m + τ·dT_m/dt equals the true T exactly.
+    Uncompensated, the reading is r·τ low."""
+    r, t0c = 0.4, 30.0                                        # K/s, °C
+    true = lambda t: t0c + r * t                              # noqa: E731
+    read = lambda t: t0c + r * (t - tau * (1 - math.exp(-t / tau)))   # noqa: E731
+    comp = OilTemperature(313.15, 0.5, EventLog(period_ns=NS), sensor_tau_s=tau)
+    plain = OilTemperature(313.15, 0.5, EventLog(period_ns=NS))
+    t_end = 20 * tau
+    for k in range(int(t_end * 5) + 1):                       # 5 Hz readings, model asks at each
+        t = k * 0.2
+        sample = (read(t), int(round(t * NS)))
+        got, raw = comp.at(sample[1], sample), plain.at(sample[1], sample)
+    assert got - 273.15 == pytest.approx(true(t_end), abs=1e-6)
+    assert raw - 273.15 == pytest.approx(true(t_end) - r * tau, abs=1e-6)
+    assert comp.report()["oil_temperature_lead_k"] == pytest.approx(r * tau, rel=1e-6)
+
+
+def test_thermometer_lag_compensation_restarts_with_the_source():
+    """Behaviour: readings stamped back in time (a restarted source) start a new window: no lead from a
+    slope across the restart."""
+    comp = OilTemperature(313.15, 0.5, EventLog(period_ns=NS), sensor_tau_s=3.0)
+    for k in range(20):
+        comp.at(k * NS // 5, (30.0 + k, k * NS // 5))
+    assert comp.report()["oil_temperature_lead_k"] > 0
+    assert comp.at(NS // 10, (50.0, NS // 10)) == pytest.approx(323.15)
+    assert comp.report()["oil_temperature_lead_k"] == 0.0
 
 
 def _run(core, t0_ms, t1_ms, temp_c=None):

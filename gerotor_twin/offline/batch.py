@@ -36,7 +36,9 @@ __all__ = ["find_bags", "run_batch", "add_parser", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("name", "status", "reason", "date_utc", "duration_s", "speed_min_rpm", "speed_max_rpm",
                "delivery_min_bar", "delivery_max_bar", "plateaus", "flow_bias_m3s", "flow_rmse_m3s",
-               "flow_max_abs_m3s", "eta_bias", "eta_rmse", "health", "bag", "report")
+               "flow_max_abs_m3s", "eta_bias", "eta_rmse", "health", "health_leakage_factor",
+               "health_leakage_factor_sd", "health_reference_efficiency", "fit_combination", "fit_factor",
+               "fit_factor_lo", "fit_factor_hi", "fit_eta_max_abs", "fit_error", "bag", "report")
 
 
 def find_bags(pattern: str) -> list[Path]:
@@ -60,15 +62,17 @@ def _item(bag: Path) -> dict:
     return {"id": digest, "bag": str(bag), "name": f"{bag.stem}-{digest[:8]}"}
 
 
-def _prepare(out: Path, model: str, config: str | None) -> None:
+def _prepare(out: Path, model: str, config: str | None, calibrate: bool = False, oil_sensor_tau_s: float = 0.0) -> None:
     manifest = out / "manifest.json"
-    want = {"model": model, "config": str(Path(config).resolve()) if config else None}
+    want = {"model": model, "config": str(Path(config).resolve()) if config else None, "calibrate": calibrate,
+            "oil_sensor_tau_s": oil_sensor_tau_s}
     if manifest.exists():
-        have = json.loads(manifest.read_text())
-        for key, opt in (("model", "--model"), ("config", "--config")):
+        have = {"calibrate": False, "oil_sensor_tau_s": 0.0, **json.loads(manifest.read_text())}
+        for key, opt in (("model", "--model"), ("config", "--config"), ("calibrate", "--calibrate"),
+                         ("oil_sensor_tau_s", "--oil-sensor-tau")):
             if have.get(key) != want[key]:
                 raise InputError(opt, want[key], f"{have.get(key)!r} (the fleet in {out} was run with it)",
-                                 "use another -o for another model or pump config")
+                                 "use another -o for another model, pump config or calibration choice")
         return
     if out.exists() and not out.is_dir():
         raise InputError("-o", str(out), "a directory (it is a file)")
@@ -83,8 +87,15 @@ def _failure(item: dict, reason: str) -> dict:
 
 def _csv_row(r: dict) -> list:
     sr, dr = r.get("speed_range_rpm") or [None, None], r.get("delivery_range_bar") or [None, None]
+    h, cal = r.get("health") or {}, r.get("calibration") or {}
+    fit = (cal.get("combinations") or [{}])[0]
+    ci = fit.get("factor_ci95") or [None, None]
     flat = {**r, "speed_min_rpm": sr[0], "speed_max_rpm": sr[1], "delivery_min_bar": dr[0],
-            "delivery_max_bar": dr[1]}
+            "delivery_max_bar": dr[1], "health": h.get("level"), "health_leakage_factor": h.get("leakage_factor"),
+            "health_leakage_factor_sd": h.get("leakage_factor_sd"),
+            "health_reference_efficiency": h.get("reference_efficiency"), "fit_combination": fit.get("label"),
+            "fit_factor": fit.get("factor"), "fit_factor_lo": ci[0], "fit_factor_hi": ci[1],
+            "fit_eta_max_abs": cal.get("eta_max_abs"), "fit_error": cal.get("error")}
     return [flat.get(c) for c in CSV_COLUMNS]
 
 
@@ -100,11 +111,17 @@ def write_fleet(out: Path, rows: list[dict], info: list[str]) -> None:
 
 
 def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None = None, scheduler: str | None = None,
-              workers: int | None = None, calibrate: bool = False, progress: IO[str] | None = sys.stderr) -> dict:
-    """Process every recording matched by ``pattern`` into ``out``; return counts and timing."""
-    if calibrate:
-        raise InputError("--calibrate", True, "absent: calibration is not available in this build",
-                         "the calibrate command (issue 14) has not landed yet")
+              workers: int | None = None, calibrate: bool = False, oil_sensor_tau_s: float = 0.0,
+              progress: IO[str] | None = sys.stderr) -> dict:
+    """Process every recording matched by ``pattern`` into ``out``; return counts and timing.
+
+    ``oil_sensor_tau_s`` [s]: the bench thermometer's lag, undone in the twin runs and the calibration
+    (as ``run-bag --oil-sensor-tau``)."""
+    from ..twin.settings import TwinSettings
+    try:
+        TwinSettings(oil_sensor_tau_s=oil_sensor_tau_s)
+    except InputError as exc:
+        raise InputError("--oil-sensor-tau", oil_sensor_tau_s, exc.allowed) from None
     if model not in BEARING_MODELS:
         raise InputError("--model", model, " | ".join(BEARING_MODELS))
     check_engine_args(scheduler, workers)
@@ -114,8 +131,9 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
     items = [_item(b) for b in find_bags(pattern)]
     out = Path(out)
     with discarded_if_unused(out, ("manifest.json", "bags.jsonl"), "bags.jsonl"):
-        _prepare(out, model, config)
-        settings = {"out": str(out.resolve()), "model": model,
+        _prepare(out, model, config, calibrate, oil_sensor_tau_s)
+        settings = {"out": str(out.resolve()), "model": model, "calibrate": calibrate,
+                    "oil_sensor_tau_s": oil_sensor_tau_s,
                     "config": str(Path(config).resolve()) if config else None}
         t0 = time.monotonic()
         with ResultStore(out / "bags.jsonl") as store:
@@ -142,7 +160,8 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
 
 def cmd_batch(args) -> int:
     res = run_batch(args.bags, args.output, model=args.model, config=args.config, scheduler=args.scheduler,
-                    workers=args.workers, calibrate=args.calibrate, progress=None if args.quiet else sys.stderr)
+                    workers=args.workers, calibrate=args.calibrate, oil_sensor_tau_s=args.oil_sensor_tau,
+                    progress=None if args.quiet else sys.stderr)
     out = Path(args.output)
     print(f"batch: {res['recordings']} recordings, {res['ok']} reported, {res['failed']} failed "
           f"({res['processed']} processed in {res['wall_s']:.1f} s on {res['workers']} worker(s), "
@@ -161,6 +180,10 @@ def add_parser(sub) -> None:
     p.add_argument("--model", default="mobility", help="outer-gear model: " + " | ".join(BEARING_MODELS))
     p.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     add_engine_arguments(p)
+    p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
+                   help="time constant of the bench's oil thermometer [s], undone in the twin and the fit "
+                        "(as run-bag --oil-sensor-tau; default 0)")
     p.add_argument("--calibrate", action="store_true",
-                   help="also calibrate per recording (not available in this build: needs the calibrate command)")
+                   help="also fit the pump (tooth-tip + lateral clearances) to each recording: "
+                        "bags/<name>/pump_fitted.yaml and the fitted factor in the summary (minutes per bag)")
     p.set_defaults(func=cmd_batch)

@@ -1,4 +1,4 @@
-"""One recording of a fleet on a worker: ``run-bag`` + ``report`` -> one summary row.
+"""One recording of a fleet on a worker: ``run-bag`` + ``report`` (+ ``calibrate``) -> one summary row.
 
 Runs where the engine puts it; the bag and the pump config are read by path,
 so on a multi-machine cluster both must be on storage every worker sees (the
@@ -19,9 +19,10 @@ from ..config import load_config
 from ..errors import InputError, one_line
 from ..io import McapReadError
 from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
+from ..twin.settings import TwinSettings
 from .run_bag import run_bag
 
-__all__ = ["process_bag", "summary_row"]
+__all__ = ["process_bag", "summary_row", "health_summary", "calibration_summary"]
 
 
 def _range(values, convert) -> list | None:
@@ -33,8 +34,8 @@ def _range(values, convert) -> list | None:
 def summary_row(bench, result: dict, p_atm: float) -> dict:
     """Fleet row of one recording from its bench data and its report metrics (SI; efficiency 0–1).
 
-    ``p_atm`` [Pa] is the gauge zero of the pump config.  ``health`` is None: this build has no
-    health estimator (issue 14 adds one).
+    ``p_atm`` [Pa] is the gauge zero of the pump config.  ``health`` is filled in by
+    :func:`health_summary` (the twin log's last health update).
     """
     twin = result["twins"][0]
     o = twin["overall"]
@@ -54,13 +55,54 @@ def summary_row(bench, result: dict, p_atm: float) -> dict:
     }
 
 
+def health_summary(twin_log) -> dict | None:
+    """The health monitor's final state in a twin log: level name, leakage factor ± sd, reference η_v,
+    alarm intervals [s]; ``None`` when the log has no health update (no measured flow, never steady)."""
+    from .health_log import LEVELS, alarm_intervals, load_health
+    try:
+        t, rows = load_health(twin_log)
+    except McapReadError:
+        return None
+    last = rows[-1]
+    return {"level": LEVELS.get(int(last["level"]), "?"), "updates": len(rows),
+            "leakage_factor": last["leakage_factor"], "leakage_factor_sd": last["leakage_factor_sd"],
+            "reference_efficiency": last["reference_efficiency"],
+            "alarms": [list(a) for a in alarm_intervals(t, rows)]}
+
+
+def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s: float = 0.0) -> dict:
+    """Calibrate the pump on one recording (``gerotor-twin calibrate``, one process: a Dask worker is
+    one core); write ``pump_fitted.yaml`` and ``calibration.json`` into ``out_dir``; return the fitted
+    combinations with their 95 % intervals and residuals, or ``{"error": reason}`` (the row stays ok)."""
+    import json
+
+    import yaml
+
+    from .calibration_run import calibrate_bags, fitted_config
+    from .plateaus import DetectorSettings
+    try:
+        res = calibrate_bags([bag], config_path=config, model=model, jobs=1,
+                             detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s))
+        (out_dir / "pump_fitted.yaml").write_text(yaml.safe_dump(fitted_config(res), sort_keys=False))
+        (out_dir / "calibration.json").write_text(json.dumps(res, indent=1, default=float))
+    except (InputError, McapReadError, ValueError, np.linalg.LinAlgError) as exc:
+        return {"error": one_line(exc)}
+    f = res["fit"]
+    return {"config": str(out_dir / "pump_fitted.yaml"), "plateaus": len(res["plateau_records"]),
+            "combinations": [{"label": c["label"], "factor": c["factor"], "factor_ci95": c["factor_ci95"]}
+                             for c in f["combinations"]],
+            "eta_max_abs": f["eta_error"]["max_abs"]}
+
+
 def process_bag(settings: dict, item: dict) -> dict:
     """Run the twin over ``item["bag"]`` and report it into ``settings["out"]/bags/<name>/``; return the row.
 
     Parameters
     ----------
     settings : dict
-        ``out`` (fleet directory), ``model`` (outer-gear model), ``config`` (pump YAML path or None).
+        ``out`` (fleet directory), ``model`` (outer-gear model), ``config`` (pump YAML path or None),
+        ``calibrate`` (also fit the pump to the recording; the twin still runs the given config, so
+        the residuals show how far this pump is from it and the fit says by how much).
     item : dict
         ``id``, ``bag`` (absolute path), ``name`` (directory name of its outputs).
     """
@@ -72,12 +114,17 @@ def process_bag(settings: dict, item: dict) -> dict:
            "twin": str(d / "twin.mcap"), "report": str(d / "report.html")}
     try:
         d.mkdir(parents=True, exist_ok=True)
+        twin_settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=settings.get("oil_sensor_tau_s", 0.0))
         stats = run_bag(item["bag"], d / "twin.mcap", model=settings["model"], config_path=settings["config"],
-                        overwrite=True, progress=None)
+                        settings=twin_settings, overwrite=True, progress=None)
         result = build_report(item["bag"], [d / "twin.mcap"], d / "report.html", d / "report.json")
         p_atm = load_config(settings["config"]).fluid.atmospheric_pa
         row.update(summary_row(load_bench(item["bag"]), result, p_atm))
         row["real_time_factor"] = stats["real_time_factor"]
+        row["health"] = health_summary(d / "twin.mcap")
+        if settings.get("calibrate"):
+            row["calibration"] = calibration_summary(item["bag"], settings["config"], settings["model"], d,
+                                                     settings.get("oil_sensor_tau_s", 0.0))
         if not math.isfinite(row["duration_s"]):
             raise McapReadError(item["bag"], "no finite time span")
     except (McapReadError, InputError, OSError, ValueError) as exc:

@@ -58,13 +58,37 @@ def _row(out: Path, r: dict) -> str:
     if r["status"] != "ok":
         return (f"<tr><td class='l'>{name}</td><td class='l'>failed</td>"
                 f"<td class='l' colspan='9'>{_e(r['reason'])}</td></tr>")
-    health = "n/a (no health estimator in this build)" if r.get("health") is None else r["health"]
+    fit = _fit_cell(r.get("calibration"))
     return (f"<tr><td class='l'>{name}</td><td class='l'>ok</td><td class='l'>{_e(r['date_utc'])}</td>"
             f"<td>{r['duration_s']:.1f}</td><td>{_rng(r['speed_range_rpm'])}</td>"
             f"<td>{_rng(r['delivery_range_bar'], '{:.1f}')}</td><td>{r['plateaus']}</td>"
             f"<td>{_n(r['flow_bias_m3s'], LPM, '{:+.3f}')} / {_n(r['flow_rmse_m3s'], LPM, '{:.3f}')}</td>"
             f"<td>{_n(r['eta_bias'], 100, '{:+.2f}')} / {_n(r['eta_rmse'], 100)}</td>"
-            f"<td class='l'>{_e(health)}</td><td class='l'>{_e('; '.join(r.get('notes') or [])[:300])}</td></tr>")
+            f"<td class='l'>{_health_cell(r.get('health'))}</td>{fit}"
+            f"<td class='l'>{_e('; '.join(r.get('notes') or [])[:300])}</td></tr>")
+
+
+def _health_cell(h: dict | None) -> str:
+    """Last health level with the leakage factor ± 1σ and the alarm intervals (s from the start)."""
+    if not h:
+        return "n/a (no health update: no measured flow or never steady)"
+    alarms = ", ".join(f"{a[0]} {a[1]:.0f}–{a[2]:.0f} s" for a in h.get("alarms", []))
+    return (f"<b>{_e(h['level'])}</b>: k = {h['leakage_factor']:.3f} ± {h['leakage_factor_sd']:.3f}, "
+            f"η<sub>v,ref</sub> {100 * h['reference_efficiency']:.1f} %" + (f"<br>{_e(alarms)}" if alarms else ""))
+
+
+def _fit_cell(cal: dict | None) -> str:
+    """Fitted clearance combination with its 95 % interval (only in a fleet run with --calibrate)."""
+    if cal is None:
+        return ""
+    if "error" in cal:
+        return f"<td class='l'>not fitted: {_e(cal['error'])}</td>"
+    c = cal["combinations"][0] if cal["combinations"] else None
+    if c is None:
+        return "<td class='l'>nothing identifiable</td>"
+    lo, hi = c["factor_ci95"]
+    return (f"<td class='l'>{_e(c['label'])} × {c['factor']:.3f} [{lo:.3f}, {hi:.3f}]; "
+            f"|η err| ≤ {100 * cal['eta_max_abs']:.2f} pt</td>")
 
 
 def fleet_page(out: Path, rows: list[dict], info: list[str]) -> str:
@@ -74,10 +98,12 @@ def fleet_page(out: Path, rows: list[dict], info: list[str]) -> str:
     if ok:
         fig = figure(fig_errors(ok), "fig-fleet-errors", "Mean-flow error (bias, RMSE) and volumetric-efficiency "
                      "bias per recording, over its steady plateaus.")
+    fitted = any(r.get("calibration") is not None for r in ok)
     head = ("<tr><th class='l'>recording</th><th class='l'>status</th><th class='l'>date (UTC)</th>"
             "<th>duration [s]</th><th>speed [rpm]</th><th>delivery [bar g]</th><th>plateaus</th>"
             "<th>flow bias / RMSE [L/min]</th><th>η<sub>v</sub> bias / RMSE [%-pt]</th>"
-            "<th class='l'>health</th><th class='l'>notes</th></tr>")
+            "<th class='l'>health (last update)</th>"
+            + ("<th class='l'>fitted clearance factor [95 %]</th>" if fitted else "") + "<th class='l'>notes</th></tr>")
     body = "".join(_row(out, r) for r in rows)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>Fleet summary</title><style>{_CSS}</style></head>

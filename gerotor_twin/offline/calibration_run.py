@@ -176,7 +176,9 @@ def cmd_calibrate(args) -> int:
         if not (math.isfinite(v) and 0 <= v <= 600):
             raise InputError(flag, v, "[0, 600] s")
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s)
+    if not (math.isfinite(args.oil_sensor_tau) and 0.0 <= args.oil_sensor_tau <= 120.0):
+        raise InputError("--oil-sensor-tau", args.oil_sensor_tau, "[0, 120] s")
+    det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s, oil_sensor_tau_s=args.oil_sensor_tau)
     res = calibrate_bags(args.bench, config_path=args.config, params=names, model=args.model,
                          holdout=args.holdout, jobs=args.jobs, detector=det, progress=say)
     raw = fitted_config(res)
@@ -210,6 +212,9 @@ def add_parser(sub) -> None:
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--settle-s", type=float, default=1.0, help="dropped at each plateau start [s] (default 1)")
     p.add_argument("--min-plateau-s", type=float, default=1.5, help="shortest plateau kept [s] (default 1.5)")
+    p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
+                   help="time constant of the bench's oil thermometer [s]: each plateau's oil temperature is "
+                        "its mean reading + S × the readings' slope (default 0 = as read)")
     p.add_argument("--json", metavar="F", help="write the whole result (per plateau, covariance) as JSON")
     p.add_argument("--report", metavar="F.html", help="write a one-page HTML report")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")

@@ -26,6 +26,7 @@ class DetectorSettings:
     grid_s: float = 0.1          #: bin width [s]
     min_s: float = 1.5           #: shortest plateau kept, after settling [s]
     settle_s: float = 1.0        #: dropped at the start of each plateau (drive, valve, flow meter) [s]
+    oil_sensor_tau_s: float = 0.0  #: oil thermometer lag [s]: plateau mean + τ × slope of the readings
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,19 @@ def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
     return float(v.mean()) if v.size else math.nan
 
 
+def _oil_on(series, t0: float, t1: float, tau: float) -> float:
+    """Mean oil reading over [t0, t1] [°C], plus ``tau`` × its least-squares slope (the thermometer's lag
+    undone, as the node's ``oil_sensor_tau_s``: :mod:`gerotor_twin.twin.oil_temperature`)."""
+    from gerotor_twin.twin.oil_temperature import least_squares_slope
+    if series is None or len(series[0]) == 0:
+        return math.nan
+    t, v = np.asarray(series[0]), np.asarray(series[1])
+    keep = (t >= t0) & (t <= t1) & np.isfinite(v)
+    if not keep.any():
+        return math.nan
+    return float(v[keep].mean()) + (tau * least_squares_slope(t[keep], v[keep]) if tau > 0 else 0.0)
+
+
 def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> list[PlateauRecord]:
     """Detect the steady plateaus of one bench recording and average the bench series on each.
 
@@ -107,6 +121,6 @@ def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> lis
             bag=str(path), index=p.index, t0_s=p.t0, t1_s=p.t1,
             omega=float(np.mean(grid.omega[p.i0:p.i1])), p_delivery_pa=float(np.mean(grid.p_delivery[p.i0:p.i1])),
             p_suction_pa=_mean_on(bench.suction_pressure, edges, p.i0, p.i1),
-            oil_temperature_c=_mean_on(bench.temperature, edges, p.i0, p.i1),
+            oil_temperature_c=_oil_on(bench.temperature, edges[p.i0], edges[p.i1], settings.oil_sensor_tau_s),
             flow_m3s=float(q.mean()), flow_sem_m3s=sem, bins=int(q.size)))
     return out

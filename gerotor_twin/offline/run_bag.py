@@ -190,8 +190,13 @@ def cmd_run_bag(args) -> int:
     if out.exists() and not args.overwrite:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     try:
+        settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=args.oil_sensor_tau)
+    except InputError as exc:
+        raise InputError("--oil-sensor-tau", args.oil_sensor_tau, exc.allowed) from None
+    try:
         res = run_bag(args.bag, out, model=args.model, config_path=args.config, overwrite=args.overwrite,
-                      progress=None if args.quiet else sys.stderr, health=health_from_args(args.health))
+                      settings=settings, progress=None if args.quiet else sys.stderr,
+                      health=health_from_args(args.health))
     except McapReadError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
@@ -210,6 +215,9 @@ def add_parser(sub) -> None:
     p.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
+                   help="time constant of the bench's oil thermometer [s]: the model runs at the reading "
+                        "plus S × its rate of change (as the node's oil_sensor_tau_s; default 0 = off)")
     p.add_argument("--health", action="append", default=[], metavar="NAME=VALUE",
                    help="health monitor setting, as the node's health_<NAME> parameter (e.g. adapt=true, "
                         "warn_pt=1.5); repeatable")

@@ -35,7 +35,7 @@ BENCH_OPTIONAL = {"/bench/suction_pressure": m.FLUID_PRESSURE, "/bench/oil_tempe
 TWIN_REQUIRED = {"/twin/flow_summary": m.FLOAT64_MULTIARRAY}
 TWIN_OPTIONAL = {"/twin/delivery_flow": m.FLOAT64, "/twin/eccentricity": m.VECTOR3_STAMPED,
                  "/twin/tooth_gaps": m.FLOAT64_MULTIARRAY, "/twin/chamber_waveform": m.FLOAT64_MULTIARRAY,
-                 "/twin/chamber_pressures": m.FLOAT64_MULTIARRAY}
+                 "/twin/chamber_pressures": m.FLOAT64_MULTIARRAY, "/twin/health": m.FLOAT64_MULTIARRAY}
 
 
 @dataclass
@@ -68,6 +68,7 @@ class TwinData:
     eccentricity: tuple[np.ndarray, np.ndarray] | None = None   #: (t, (n, 2) [m])
     gaps: tuple[np.ndarray, np.ndarray] | None = None            #: (t, (n, N) [m])
     waveforms: tuple[np.ndarray, np.ndarray] | None = None       #: (t, (n, samples, 1+N))
+    health: tuple[np.ndarray, np.ndarray] | None = None          #: (t, (n, fields)), twin.health.HEALTH_FIELDS
     pump_config_yaml: str | None = None
     parameters: dict = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
@@ -182,7 +183,8 @@ def load_twin(path: str | Path, t0_ns: int, label: str | None = None) -> TwinDat
                     summary=(t, v[:, :4]), pump_config_yaml=cfg, parameters=dict(params),
                     missing=missing, warnings=notes, meta=dict(meta), library=f.library or "")
     for topic, attr in (("/twin/delivery_flow", "flow"), ("/twin/eccentricity", None),
-                        ("/twin/tooth_gaps", "gaps"), ("/twin/chamber_waveform", "waveforms")):
+                        ("/twin/tooth_gaps", "gaps"), ("/twin/chamber_waveform", "waveforms"),
+                        ("/twin/health", "health")):
         if topic not in s or len(s[topic]) == 0:
             continue
         try:

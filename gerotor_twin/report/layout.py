@@ -9,6 +9,7 @@ the page, its table of contents, the CSV downloads and the Chromium test pick it
 from __future__ import annotations
 
 from . import figures as F
+from . import health_panels as H
 from . import tables as T
 from . import timeseries as TS
 from .context import ReportContext
@@ -67,6 +68,8 @@ PAGE = [
     TS.ts_flow,
     TS.ts_residual,
     TS.ts_efficiency,
+    H.ts_health_efficiency,
+    H.ts_health_leakage,
     T.summary_table,
     T.plateau_tables,
     img_plateau_errors,

@@ -116,7 +116,7 @@ class TwinNode(Node):
             stale_timeout_s=prm["stale_timeout_s"], filter_tau_s=prm["input_filter_tau_s"],
             stamp_restart_s=prm["stamp_restart_s"], stamp_ahead_s=prm["stamp_ahead_s"],
             stamp_rebase_samples=prm["stamp_rebase_samples"], waveform_every=prm["waveform_every"],
-            waveform_samples=prm["waveform_samples"])
+            waveform_samples=prm["waveform_samples"], oil_sensor_tau_s=prm["oil_sensor_tau_s"])
         self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
         self._warm_up(Inputs)
         self.stopping = False

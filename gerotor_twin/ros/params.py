@@ -61,6 +61,9 @@ PARAMETERS: tuple[Param, ...] = (
     Param("oil_temperature_topic", "bench/oil_temperature",
           "sensor_msgs/Temperature oil temperature [degC] (optional; sets the oil properties, else the "
           "config's reference temperature; '' = off)"),
+    Param("oil_sensor_tau_s", 0.0, "time constant of the oil thermometer [s]: the model runs at the reading "
+                                   "plus tau x its rate of change (lag compensation); 0 = the reading as is",
+          0.0, 120.0),
     Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
                                      "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
     Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",

@@ -69,7 +69,8 @@ class ClockDriver:
         self.recorder = recorder
         self.events = events
         #: the oil temperature the model runs at (measured or the config's reference)
-        self.oil = OilTemperature(model.config.reference_temperature_k, settings.stale_timeout_s, events)
+        self.oil = OilTemperature(model.config.reference_temperature_k, settings.stale_timeout_s, events,
+                                  settings.oil_sensor_tau_s)
         self.N = model.N
         self._S = settings.sample_ns
         self.state: PumpState | None = None

@@ -62,6 +62,7 @@ def model_status(snap: dict, delta: dict[str, int]) -> dict:
         "oil_temperature_c": _fmt(snap.get("oil_temperature_c")),
         "oil_temperature_source": _fmt(snap.get("oil_temperature_source")),
         "oil_temperature_fallbacks": snap.get("oil_temperature_fallbacks", 0),
+        "oil_temperature_lead_k": _fmt(snap.get("oil_temperature_lead_k")),
     }
     for k in _EVENTS:
         values[k] = counts.get(k, 0)

@@ -19,7 +19,10 @@ When it is updated (robust to ramps and to the flow meter's lag)
     ``min_flow_samples`` measured flow samples.  Ramps and steps are ignored.
     Measurement: y = mean theoretical − mean measured flow; regressor: mean predicted
     loss / the factor the model runs with; noise variance
-    (``meter_sd_rel`` · q)²/n + (``model_sd_rel`` · q)².
+    (``meter_sd_rel`` · q)²/n + max((``model_sd_rel`` · q)², (e_cal · q_th)²), where e_cal is
+    the efficiency RMSE the calibration measured (``calibration.residuals.eta_rmse`` of a
+    config written by ``gerotor-twin calibrate``; 0 for an uncalibrated config): the twin is
+    not trusted more closely than its calibration showed it fits the pump.
 What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
     k and its standard deviation, the clearance factor k^(1/n), the volumetric
     efficiency at the reference point (``reference_rpm``, ``reference_bar``) with k
@@ -50,7 +53,7 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, OutputMessage
 
-__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS"]
+__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse"]
 
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
@@ -120,6 +123,16 @@ def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> fl
     return n if math.isfinite(n) and n > 0.5 else 3.0
 
 
+def calibration_eta_rmse(config) -> float:
+    """Volumetric-efficiency RMSE [-] of the fit that produced ``config`` (its ``calibration`` block,
+    written by ``gerotor-twin calibrate``); 0 when the config carries none."""
+    try:
+        v = float(((getattr(config, "calibration", None) or {}).get("residuals") or {}).get("eta_rmse", 0.0))
+    except (TypeError, ValueError, AttributeError):
+        return 0.0
+    return v if math.isfinite(v) and 0.0 <= v < 1.0 else 0.0
+
+
 def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
     """Flow loss and theoretical flow [m³/s] of ``model`` at the reference point (periodic steady state).
 
@@ -157,6 +170,7 @@ class HealthMonitor:
         self.loss_ref, self.qth_ref = reference_loss(model, s) if s.enabled else (math.nan, math.nan)
         self.exponent = clearance_exponent(model, s) if s.enabled else 3.0
         self.est = lf.LeakageEstimate(var=s.initial_sd ** 2)
+        self.eta_rmse_cal = calibration_eta_rmse(model.config)
         self._flow: collections.deque = collections.deque(maxlen=100_000)
         self._res: collections.deque = collections.deque(maxlen=s.residual_window)
         self._ref = None            # (omega, p_delivery) the steady stretch started with
@@ -216,7 +230,8 @@ class HealthMonitor:
             return []
         q_meas = sum(samples) / len(samples)
         q_pred, q_th, loss = w.q_pred / w.revs, w.q_th / w.revs, w.loss / w.revs
-        r = (s.meter_sd_rel * q_meas) ** 2 / len(samples) + (s.model_sd_rel * q_meas) ** 2
+        r = (s.meter_sd_rel * q_meas) ** 2 / len(samples) + max((s.model_sd_rel * q_meas) ** 2,
+                                                                   (self.eta_rmse_cal * q_th) ** 2)
         est = lf.predict(self.est, end_ns / NS, s.drift_per_sqrt_s)
         self.est = lf.update(est, q_th - q_meas, loss / self.k_applied, max(r, 1e-18))
         self.last_residual = q_meas - q_pred
@@ -280,5 +295,5 @@ class HealthMonitor:
         vals = {k: f"{x:.6g}" for k, x in v.items()}
         vals.update({"adapt": str(s.adapt).lower(), "reference_rpm": f"{s.reference_rpm:g}",
                      "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
-                     "drop_pt": f"{self.drop_pt():.3f}"})
+                     "drop_pt": f"{self.drop_pt():.3f}", "model_eta_sd_from_calibration": f"{self.eta_rmse_cal:.4g}"})
         return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)

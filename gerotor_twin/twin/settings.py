@@ -71,6 +71,11 @@ class TwinSettings:
     error_report_period_s : float
         Rate limit of input-error events per (input, reason) [s]; counts are
         never rate-limited.  Default 1 s.
+    oil_sensor_tau_s : float
+        Time constant of the bench's oil thermometer (first-order lag) [s]: the
+        model runs at the measured value plus ``tau`` × its rate of change, the
+        inverse of the lag (:mod:`gerotor_twin.twin.oil_temperature`).  0 = use the
+        reading as it is (default).  [0, 120] s.
     """
 
     sample_period_s: float = 0.005
@@ -85,6 +90,7 @@ class TwinSettings:
     waveform_every: int = 1
     waveform_samples: int = 360
     error_report_period_s: float = 1.0
+    oil_sensor_tau_s: float = 0.0
 
     def __post_init__(self) -> None:
         check_range("sample_period_s", self.sample_period_s, 1e-4, 0.1, lo_open=True, unit="s")
@@ -107,6 +113,7 @@ class TwinSettings:
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise InputError(name, v, f"an integer in [{lo}, {hi}]")
         check_range("error_report_period_s", self.error_report_period_s, 0.0, 3600.0, unit="s")
+        check_range("oil_sensor_tau_s", self.oil_sensor_tau_s, 0.0, 120.0, unit="s")
 
     # integer-nanosecond views used by the core
     @property
