@@ -30,9 +30,9 @@ demo-model: $(STAMP)
 # calibration from the bundled map bag, then the health monitor over the wear bag (about 1 min)
 demo-calibrate: $(STAMP)
 	$(VENV)/bin/gerotor-twin calibrate --bench bags/bench_map.mcap -o out/demo-calibrate/pump_fitted.yaml \
-	    --json out/demo-calibrate/fit.json --report out/demo-calibrate/fit.html --overwrite
+	    --json out/demo-calibrate/fit.json --report out/demo-calibrate/fit.html --overwrite --oil-sensor-tau 3
 	$(VENV)/bin/gerotor-twin run-bag bags/bench_wear.mcap -o out/demo-calibrate/wear_twin.mcap \
-	    --config out/demo-calibrate/pump_fitted.yaml --overwrite --quiet
+	    --config out/demo-calibrate/pump_fitted.yaml --overwrite --quiet --oil-sensor-tau 3
 	$(VENV)/bin/gerotor-twin health out/demo-calibrate/wear_twin.mcap --every 4
 
 # a small design study on the embedded Dask cluster (all cores): writes out/demo-sweep/summary.html, opens nothing

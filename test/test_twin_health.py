@@ -138,3 +138,27 @@ def test_node_parameters_map_onto_settings():
     for p in PARAMETERS:
         if p.name.startswith("health_"):
             assert getattr(hs, p.name[len("health_"):]) == p.default
+
+
+def test_model_error_floored_at_the_calibration_residual(monkeypatch):
+    """Closed form: with a calibrated config (calibration.residuals.eta_rmse = e) every update's noise
+    variance is (meter_sd·q)²/n + max((model_sd·q)², (e·q_th)²), q the measured mean, n its samples."""
+    from pathlib import Path
+
+    from gerotor_twin.config import load_config
+    from gerotor_twin.model.pump import PumpModel
+    from gerotor_twin.twin.health import calibration_eta_rmse
+    cfg = load_config(Path(__file__).resolve().parent.parent / "bags" / "pump_fitted_bench_map.yaml")
+    e = cfg.calibration["residuals"]["eta_rmse"]
+    assert calibration_eta_rmse(cfg) == e > 0
+    assert calibration_eta_rmse(load_config()) == 0.0              # uncalibrated: no floor
+    seen = []
+    real_update = lf.update
+    monkeypatch.setattr(lf, "update", lambda est, y, h, r: seen.append(r) or real_update(est, y, h, r))
+    for model_sd in (0.0, 0.05):                                  # floor binding, then the setting
+        seen.clear()
+        s = HealthSettings(model_sd_rel=model_sd)
+        f = Feed(HealthMonitor(PumpModel(cfg, "fixed"), s)).run(4.0, 1.2)
+        q, n = f.qth - 1.2 * f.loss, 20                           # 1 s windows, a meter sample every 50 ms
+        want = (s.meter_sd_rel * q) ** 2 / n + max((model_sd * q) ** 2, (e * f.qth) ** 2)
+        assert seen and all(r == pytest.approx(want, rel=1e-9) for r in seen)

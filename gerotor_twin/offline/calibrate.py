@@ -160,7 +160,8 @@ def split_holdout(records: list[PlateauRecord], every: int) -> tuple[list, list]
 
 
 def plateau_errors(records: list[PlateauRecord], flow_model: np.ndarray, displacement_m3: float) -> list[dict]:
-    """Per plateau: measured and model flow [m³/s], η_v [-] and their errors (model − measured)."""
+    """Per plateau: measured and model flow [m³/s], η_v [-] and their errors (model − measured); ``eta_sem``:
+    the standard error of the measured η_v (of the plateau's mean flow) [-]."""
     rows = []
     for r, fm in zip(records, flow_model):
         qth = displacement_m3 * r.omega / (2 * math.pi)
@@ -168,7 +169,7 @@ def plateau_errors(records: list[PlateauRecord], flow_model: np.ndarray, displac
                      "oil_temperature_c": r.oil_temperature_c, "flow_measured_m3s": r.flow_m3s,
                      "flow_model_m3s": float(fm), "flow_error_m3s": float(fm - r.flow_m3s),
                      "eta_measured": r.flow_m3s / qth, "eta_model": float(fm) / qth,
-                     "eta_error": float(fm - r.flow_m3s) / qth})
+                     "eta_error": float(fm - r.flow_m3s) / qth, "eta_sem": r.flow_sem_m3s / qth})
     return rows
 
 
