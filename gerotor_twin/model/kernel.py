@@ -119,7 +119,7 @@ def _error_weights(km, op, ws):
             ws.wt[i] = 1.0 / pc.tolerance
 
 
-@njit(inline="always")
+@njit
 def _first_stage(y, th, km, op, ws, integrals):
     """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
 

@@ -82,14 +82,14 @@ def _start(tmp: Path, model: str, log_name: str, params: tuple = ()) -> tuple[su
     t0 = time.monotonic()
     proc = subprocess.Popen(args, stdout=open(log, "w"), stderr=subprocess.STDOUT, env=env,
                             start_new_session=True)
-    while time.monotonic() - t0 < 120:
+    while time.monotonic() - t0 < 300:
         if "ready in" in log.read_text():
             return proc, time.monotonic() - t0, log
         if proc.poll() is not None:
             raise RuntimeError(f"twin_node exited ({proc.returncode}): {log.read_text()[-2000:]}")
         time.sleep(0.01)
     proc.kill()
-    raise RuntimeError("twin_node not ready within 120 s")
+    raise RuntimeError("twin_node not ready within 300 s")
 
 
 def _stop(proc: subprocess.Popen) -> None:
