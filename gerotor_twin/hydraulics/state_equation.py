@@ -260,6 +260,15 @@ def convert_log_density(y: np.ndarray, old: StateEquation, new: StateEquation) -
     """Log-densities under ``new`` with the same pressures as ``y`` under ``old`` [-] (pressures continuous).
 
     Used when the oil properties change (temperature): the pressure of every
-    volume is kept, its ln(ρ/ρ₀) is recomputed with the new state equation.
+    volume is kept, its ln(ρ/ρ₀) is recomputed with the new state equation.  One compiled
+    call (element-wise calls from Python cost ≈ 1 ms each in argument unboxing).
     """
-    return np.array([log_density_of(pressure_of(float(v), old), new) for v in y])
+    return _convert_log_density(np.ascontiguousarray(y, dtype=np.float64), old, new)
+
+
+@njit
+def _convert_log_density(y, old, new):
+    out = np.empty_like(y)
+    for i in range(y.size):
+        out[i] = log_density_of(pressure_of(y[i], old), new)
+    return out

@@ -40,6 +40,7 @@ from mcap.writer import CompressionType, Writer
 from gerotor_twin import __version__
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.codec import encoder_for
+from gerotor_twin.io.messages import FLOAT64_MULTIARRAY
 from gerotor_twin.io.qos import QosSpec, resolve_qos
 from gerotor_twin.io.rosbag2_meta import ROSBAG2_METADATA, TopicCount, rosbag2_record
 from gerotor_twin.io.schemas import SCHEMA_ENCODING, message_definition, normalize_msgtype
@@ -325,8 +326,13 @@ class McapLog:
         return self._topic(topic).msgtype
 
     def encode(self, topic: str, msg: Any) -> bytes:
-        """CDR bytes of ``msg`` (dict with field names, or object) for ``topic``'s type."""
-        return encoder_for(self._topic(topic).msgtype)(msg)
+        """CDR bytes of ``msg`` (dict with field names, or object) for ``topic``'s type (Float64MultiArray
+        dicts by :mod:`~gerotor_twin.io.fastcdr`: the waveforms are thousands of doubles)."""
+        msgtype = self._topic(topic).msgtype
+        if msgtype == FLOAT64_MULTIARRAY and isinstance(msg, dict):
+            from gerotor_twin.io.fastcdr import encode_float64_multiarray
+            return encode_float64_multiarray(msg)
+        return encoder_for(msgtype)(msg)
 
     def write(self, topic: str, msg: Any, log_time_ns: int, publish_time_ns: int | None = None) -> None:
         """Encode ``msg`` (dict/object, see :mod:`~gerotor_twin.io.messages`) and log it.
