@@ -10,9 +10,11 @@ permission) are caught here, the line bounded in length.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -182,13 +184,17 @@ def cmd_bench(args) -> int:
 
     cfg = load_config(args.config)
     if args.what == "realtime":
-        rows = realtime(cfg, models=tuple((args.models or "fixed,mobility").split(",")), seconds=args.seconds,
-                        repeats=args.repeats)
+        speeds = tuple(int(round(v)) for v in _floats(args.rpm or "1000,2000,3000", "--rpm"))
+        if not all(0 < v <= cfg.range.max_speed_rpm for v in speeds):
+            raise InputError("--rpm", args.rpm, f"speeds in (0, {cfg.range.max_speed_rpm:g}] rpm")
+        (bar,) = _floats(args.bar or "27.5", "--bar")[:1]
+        rows = realtime(cfg, models=tuple((args.models or "fixed,mobility").split(",")), speeds=speeds, bar=bar,
+                        seconds=args.seconds, repeats=args.repeats)
         if args.json:
             _write_json(args.json, {"realtime": rows})
     elif args.what == "accuracy":
         from .model.accuracy import print_accuracy
-        rows = print_accuracy(cfg, rpms=_floats(args.rpm, "--rpm"), bars=_floats(args.bar, "--bar"),
+        rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
                               models=tuple((args.models or "mobility").split(",")))
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
@@ -253,11 +259,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
     b.add_argument("what", choices=("realtime", "accuracy", "models"),
-                   help="realtime: model real-time factor at 1000/2000/3000 rpm; "
+                   help="realtime: model real-time factor (default 1000/2000/3000 rpm, 27.5 bar); "
                         "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
-    b.add_argument("--rpm", default="3000", help="accuracy: shaft speed(s) [rpm], comma-separated")
-    b.add_argument("--bar", default="27.5", help="accuracy: delivery pressure(s) [bar gauge], comma-separated")
+    b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
+                                               "1000,2000,3000; accuracy: default 3000)")
+    b.add_argument("--bar", default=None, help="delivery pressure(s) [bar gauge], comma-separated (default 27.5; "
+                                               "realtime uses the first)")
     b.add_argument("--models", help="comma-separated outer-gear models "
                                      "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")
@@ -279,6 +287,10 @@ def main(argv=None) -> int:
     except (InputError, McapReadError) as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
+    except BrokenPipeError:       # the reader of our output left (`| head`): stop quietly, as cat does
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141                # 128 + SIGPIPE
     except OSError as exc:        # a path the user gave: directory, permission, missing (one line, exit 2)
         name = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         print(f"error:{clip(name)}: {clip(exc.strerror or str(exc))}", file=sys.stderr)

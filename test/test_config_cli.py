@@ -116,3 +116,32 @@ def test_cli_bench_realtime_runs(tmp_path):
     assert p.returncode == 0, p.stderr
     rows = json.loads((tmp_path / "b.json").read_text())["realtime"]
     assert [r["rpm"] for r in rows] == [1000, 2000, 3000] and all(r["real_time_factor"] > 0 for r in rows)
+
+
+def test_cli_bench_realtime_takes_rpm_and_bar(tmp_path, capsys):
+    """Behaviour: --rpm selects the speeds of `bench realtime` (default 1000,2000,3000), --bar its pressure;
+    a speed outside the pump's range is one line, exit 2."""
+    from gerotor_twin.cli import main
+    js = tmp_path / "b.json"
+    assert main(["bench", "realtime", "--models", "fixed", "--rpm", "1500", "--bar", "10", "--seconds", "0.01",
+                 "--repeats", "1", "--json", str(js)]) == 0
+    assert "(10 bar," in capsys.readouterr().out
+    assert [r["rpm"] for r in json.loads(js.read_text())["realtime"]] == [1500]
+    assert main(["bench", "realtime", "--rpm", "4000"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --rpm = '4000'") and "\n" not in err
+
+
+def test_cli_output_into_a_closed_pipe_is_quiet(monkeypatch, capsys):
+    """Behaviour: when the reader of stdout goes away (`gerotor-twin ... | head`) the command ends with
+    128 + SIGPIPE and no traceback or 'error:' line."""
+    from gerotor_twin import cli
+
+    def gone(args):
+        raise BrokenPipeError(32, "Broken pipe")
+    parser = cli.build_parser()
+    args = parser.parse_args(["geometry"])
+    args.func = gone
+    monkeypatch.setattr(cli, "build_parser", lambda: type("P", (), {"parse_args": lambda self, argv: args})())
+    assert cli.main(["geometry"]) == 141         # (capsys's stdout has no file descriptor to redirect)
+    assert capsys.readouterr().err == ""
