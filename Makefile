@@ -27,7 +27,7 @@ demo: $(STAMP)
 demo-model: $(STAMP)
 	$(VENV)/bin/gerotor-twin demo --out out/demo-model
 
-# calibration from the bundled map bag, then the health monitor over the wear bag (about 1 min)
+# calibration from the bundled map bag, then the health monitor over the wear bag (about 4 min on 2 cores)
 demo-calibrate: $(STAMP)
 	$(VENV)/bin/gerotor-twin calibrate --bench bags/bench_map.mcap -o out/demo-calibrate/pump_fitted.yaml \
 	    --json out/demo-calibrate/fit.json --report out/demo-calibrate/fit.html --overwrite --oil-sensor-tau 3
