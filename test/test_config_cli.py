@@ -145,3 +145,19 @@ def test_cli_output_into_a_closed_pipe_is_quiet(monkeypatch, capsys):
     monkeypatch.setattr(cli, "build_parser", lambda: type("P", (), {"parse_args": lambda self, argv: args})())
     assert cli.main(["geometry"]) == 141         # (capsys's stdout has no file descriptor to redirect)
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("argv", [["run-bag", "bags/bench_transient.mcap", "-o", "{tmp}/x.mcap"],
+                                  ["calibrate", "--bench", "bags/bench_map.mcap", "-o", "{tmp}/x.yaml"],
+                                  ["batch", "bags", "-o", "{tmp}/fleet"]])
+@pytest.mark.parametrize("bad", ["-1", "500", "nan"])
+def test_oil_sensor_tau_refused_alike(tmp_path, capsys, argv, bad):
+    """Bad input: every command with --oil-sensor-tau refuses it in one line naming the flag; nothing written."""
+    from gerotor_twin.cli import main
+    root = Path(__file__).resolve().parent.parent
+    args = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    args = [str(root / a) if a.startswith("bags") else a for a in args] + ["--oil-sensor-tau", bad]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --oil-sensor-tau = ") and "\n" not in err
+    assert list(tmp_path.iterdir()) == []

@@ -117,11 +117,8 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
 
     ``oil_sensor_tau_s`` [s]: the bench thermometer's lag, undone in the twin runs and the calibration
     (as ``run-bag --oil-sensor-tau``)."""
-    from ..twin.settings import TwinSettings
-    try:
-        TwinSettings(oil_sensor_tau_s=oil_sensor_tau_s)
-    except InputError as exc:
-        raise InputError("--oil-sensor-tau", oil_sensor_tau_s, exc.allowed) from None
+    from ..twin.settings import oil_sensor_tau_arg
+    oil_sensor_tau_arg(oil_sensor_tau_s)
     if model not in BEARING_MODELS:
         raise InputError("--model", model, " | ".join(BEARING_MODELS))
     check_engine_args(scheduler, workers)

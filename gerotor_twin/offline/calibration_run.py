@@ -176,9 +176,9 @@ def cmd_calibrate(args) -> int:
         if not (math.isfinite(v) and 0 <= v <= 600):
             raise InputError(flag, v, "[0, 600] s")
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    if not (math.isfinite(args.oil_sensor_tau) and 0.0 <= args.oil_sensor_tau <= 120.0):
-        raise InputError("--oil-sensor-tau", args.oil_sensor_tau, "[0, 120] s")
-    det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s, oil_sensor_tau_s=args.oil_sensor_tau)
+    from ..twin.settings import oil_sensor_tau_arg
+    det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
+                           oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
     res = calibrate_bags(args.bench, config_path=args.config, params=names, model=args.model,
                          holdout=args.holdout, jobs=args.jobs, detector=det, progress=say)
     raw = fitted_config(res)

@@ -30,7 +30,7 @@ from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
 from gerotor_twin.twin.core import TwinCore
 from gerotor_twin.twin.inputs import INPUTS
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics
-from gerotor_twin.twin.settings import NS, TwinSettings
+from gerotor_twin.twin.settings import NS, TwinSettings, oil_sensor_tau_arg
 
 __all__ = ["run_bag", "RUN_BAG_METADATA"]
 
@@ -189,10 +189,7 @@ def cmd_run_bag(args) -> int:
     out = Path(args.output)
     if out.exists() and not args.overwrite:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
-    try:
-        settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=args.oil_sensor_tau)
-    except InputError as exc:
-        raise InputError("--oil-sensor-tau", args.oil_sensor_tau, exc.allowed) from None
+    settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
     try:
         res = run_bag(args.bag, out, model=args.model, config_path=args.config, overwrite=args.overwrite,
                       settings=settings, progress=None if args.quiet else sys.stderr,

@@ -54,7 +54,7 @@ def ts_health_efficiency(ctx: ReportContext) -> TimeSeries | None:
     twin, t, v = found
     eta, sd = v[:, F["reference_efficiency"]] * 100, v[:, F["reference_efficiency_sd"]] * 100
     cal = v[:, F["calibrated_reference_efficiency"]] * 100
-    traces = [Trace("estimated", t, eta, "#1f5fa8", 1.6, csv=None, decimals=2),
+    traces = [Trace("estimated", t, eta, "#1f5fa8", 1.6, decimals=2),
               Trace("calibrated (healthy)", t, cal, "#2a8a3a", 1.2, (6, 3), decimals=2)]
     for name, color in (("warn_pt", "#c98a00"), ("error_pt", "#c0392b")):
         pt = _setting(twin, name)

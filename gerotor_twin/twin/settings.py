@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 from gerotor_twin.errors import InputError, check_range
 
-__all__ = ["TwinSettings", "NS"]
+__all__ = ["TwinSettings", "NS", "oil_sensor_tau_arg"]
 
 NS = 1_000_000_000
 
@@ -132,3 +132,12 @@ class TwinSettings:
     def as_dict(self) -> dict:
         """Plain dict (for MCAP metadata and reports)."""
         return asdict(self)
+
+
+def oil_sensor_tau_arg(value: float, flag: str = "--oil-sensor-tau") -> float:
+    """``value`` [s] checked as :attr:`TwinSettings.oil_sensor_tau_s`; the error names the command-line ``flag``."""
+    try:
+        TwinSettings(oil_sensor_tau_s=value)
+    except InputError as exc:
+        raise InputError(flag, value, exc.allowed) from None
+    return value
