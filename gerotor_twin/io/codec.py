@@ -19,7 +19,8 @@ import functools
 import struct
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 from mcap_ros2._dynamic import serialize_dynamic

@@ -1,9 +1,12 @@
 """CDR bytes -> message namespace without rclpy, for the bench input types.
 
-Uses ``mcap_ros2``'s dynamic decoder driven by the installed ``.msg``
-definitions (the same text :mod:`gerotor_twin.io.schemas` writes into MCAP
-schemas), so the node decodes its ``raw=True`` subscriptions exactly as a
-reader of its log would.
+The bench inputs and the node's own outputs go through
+:mod:`gerotor_twin.io.fastcdr` (``struct`` at fixed offsets, tested equal to
+the generic path); every other type, and any buffer the fast path does not
+accept, through ``mcap_ros2``'s dynamic decoder driven by the installed
+``.msg`` definitions (the same text :mod:`gerotor_twin.io.schemas` writes into
+MCAP schemas), so the node decodes its ``raw=True`` subscriptions exactly as a
+reader of its log would, and a malformed buffer gets that decoder's error.
 """
 from __future__ import annotations
 
@@ -13,6 +16,7 @@ from typing import Any, Callable
 from mcap_ros2._dynamic import generate_dynamic
 
 from gerotor_twin.errors import InputError
+from gerotor_twin.io.fastcdr import decode_fast
 from gerotor_twin.io.schemas import message_definition
 
 __all__ = ["decoder_for", "decode"]
@@ -27,6 +31,9 @@ def decoder_for(msgtype: str) -> Callable[[bytes], Any]:
 
 def decode(msgtype: str, data: bytes) -> Any:
     """Decode one CDR message; :class:`InputError` if the bytes do not fit the type."""
+    msg = decode_fast(msgtype, data)
+    if msg is not None:
+        return msg
     try:
         return decoder_for(msgtype)(bytes(data))
     except InputError:

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import math
 import operator
-from typing import Any, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -22,7 +22,8 @@ from __future__ import annotations
 import collections
 import math
 from dataclasses import dataclass
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import messages as m
