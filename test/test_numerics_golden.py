@@ -7,6 +7,7 @@ within the error budget of issue 10 at each point: RMS chamber-pressure error �
 (p_delivery − p_suction), |η error| ≤ 0.3 % relative, |peak-pressure error| ≤ 2 %.
 A change of the default numerics (step, tolerance, error measure) that breaks it fails here.
 """
+import numpy as np
 import pytest
 
 from golden.make_reference import POINTS, path
@@ -34,3 +35,29 @@ def test_golden_reference_is_reproduced_by_todays_model(cfg, rpm, bar):
     err = compare(now, ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
     assert abs(err["efficiency_error"]) < 1e-5
     assert err["rms_pressure_error"] < 1e-4
+
+
+def test_peak_error_splits_into_solver_and_output_grid_closed_form():
+    """Closed form: a pressure p_s + A(1 + cos(θ − θ_pk)) per chamber, the reference sampled finely and
+    exactly, the "default" on a 2° grid whose nearest sample is 0.7° from the peak (the reference's 0.05°).
+    With an exact solution the whole peak error is the grid's, A(cos 0.7° − cos 0.05°) / A(1 + cos 0.05°);
+    with a solution b·2A too high everywhere the solver part is b·2A / A(1 + cos 0.05°), the grid part
+    unchanged."""
+    import math
+
+    from gerotor_twin.model.accuracy import Revolution, compare
+    ps, amp, pk = 1e5, 5e5, math.radians(90.7)
+    wave = lambda th: ps + amp * (1.0 + np.cos(th - pk))     # noqa: E731 - one-line closed form
+    fine = np.radians(np.arange(1, 1441) * 0.25)              # (0, 2π], 0.25° samples
+    coarse = np.radians(np.arange(1, 181) * 2.0)              # every 8th fine sample
+    ref = Revolution(fine, np.column_stack([wave(fine)] * 2), np.ones(fine.size), 0.9, 1.0)
+    for bias in (0.0, 0.01):
+        p = wave(coarse) + bias * 2 * amp
+        test = Revolution(coarse, np.column_stack([p, p]), np.ones(coarse.size), 0.9, 1.0)
+        e = compare(test, ref, ps, ps + 2 * amp)
+        c_ref = math.cos(math.radians(0.05))
+        grid = (math.cos(math.radians(0.7)) - c_ref) / (1.0 + c_ref)
+        solver = bias * 2.0 / (1.0 + c_ref)
+        assert e["peak_sampling_error"] == pytest.approx(grid, rel=1e-6)
+        assert e["peak_numerics_error"] == pytest.approx(solver, rel=1e-6, abs=1e-12)
+        assert e["peak_pressure_error"] == pytest.approx(grid + solver, rel=1e-6)
