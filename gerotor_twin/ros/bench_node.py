@@ -21,6 +21,11 @@ Figures (printed, never asserted), per speed
                       sequence gaps + missed at start + MCAP writer drops)
     unaccounted       published - logged - lost (must be 0)
     skips             lag-policy skips in the window (0 = the model kept up with the clock)
+
+With ``repeats`` > 1 each speed is run that many times, each with a fresh node,
+and a ``median`` line follows (medians of the rates and latencies, sums of the
+counts): on a shared 2-core machine the node CPU of one start differs from the
+next by several points.
 """
 from __future__ import annotations
 
@@ -233,9 +238,9 @@ def latency_ms(inputs_ns: list[int], outputs: list[tuple[int, int]]) -> tuple[fl
 
 
 def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, bar: float, rate: float,
-               seconds: float, settle: float) -> dict:
-    run_dir = tmp / f"rpm{rpm:g}"
-    run_dir.mkdir()
+               seconds: float, settle: float, repeat: int = 0) -> dict:
+    run_dir = tmp / f"rpm{rpm:g}" / f"run{repeat}"
+    run_dir.mkdir(parents=True)
     proc, _, _ = _start(run_dir, model, "node.log", params)
     pub = None
     try:
@@ -267,7 +272,7 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
         sim = float(window[-1]["simulated_s"]) - float(window[0]["simulated_s"])
         rtfs = sorted(float(v["real_time_factor"]) for v in window[1:] if v["real_time_factor"] != "n/a")
     cpu = c1 - c0
-    return {"rpm": rpm, "node_cpu_fraction": cpu / (t1 - t0),
+    return {"rpm": rpm, "repeat": repeat, "node_cpu_fraction": cpu / (t1 - t0),
             "core_rtf": rtfs[len(rtfs) // 2] if rtfs else float("nan"),
             "node_rtf": sim / cpu if sim is not None and cpu > 0 else float("nan"),
             "latency_p50_ms": p50, "latency_p99_ms": p99, "skips": int(window[-1]["skips"]) if window else None,
@@ -277,13 +282,39 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
             "thread_cpu_fraction": {k: (th1[k] - th0[k]) / (t1 - t0) for k in th0}}
 
 
+_MEDIANS = ("node_cpu_fraction", "core_rtf", "node_rtf", "latency_p50_ms", "latency_p99_ms")
+_SUMS = ("skips", "published", "logged", "lost", "unaccounted")
+
+
+def median_row(rows: list[dict]) -> dict:
+    """Medians of the rates and latencies, sums of the counts, of one speed's repeated runs."""
+    import statistics
+    med = {"rpm": rows[0]["rpm"], "repeat": "median", "runs": len(rows)}
+    for k in _MEDIANS:
+        med[k] = statistics.median(r[k] for r in rows)
+    for k in _SUMS:
+        med[k] = sum(r[k] or 0 for r in rows)
+    med["thread_cpu_fraction"] = {k: statistics.median(r["thread_cpu_fraction"][k] for r in rows)
+                                  for k in rows[0]["thread_cpu_fraction"]}
+    return med
+
+
+def _line(r: dict) -> str:
+    label = f"{r['rpm']:5g}" if r["repeat"] != "median" else "  med"
+    return (f"  {label} {100 * r['node_cpu_fraction']:8.0f}% {r['core_rtf']:9.2f} {r['node_rtf']:9.2f} "
+            f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['skips'] or 0:5d} {r['published']:10d} "
+            f"{r['logged']:8d} {r['lost']:6d} {r['unaccounted']:7d}   "
+            + " ".join(f"{k} {100 * v:.0f}%" for k, v in r["thread_cpu_fraction"].items()))
+
+
 def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, bar: float = 27.5,
-        rate: float = 1000.0, busy: int = 0, params: tuple = (), settle: float = 1.5, out=print) -> dict:
-    """Measure and print; returns the figures as a dict."""
+        rate: float = 1000.0, busy: int = 0, params: tuple = (), settle: float = 1.5, out=print,
+        repeats: int = 1) -> dict:
+    """Measure and print; returns the figures as a dict (``rows``: every run; ``medians``: per speed)."""
     result: dict = {"model": model, "rate_hz": rate, "busy": busy, "params": list(params),
                     "executor": os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset"),
                     "model_thread": os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0",
-                    "startup_s": [], "rows": []}
+                    "repeats": repeats, "startup_s": [], "rows": [], "medians": []}
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         for k in range(2):
@@ -301,12 +332,14 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
             out(f"  {'rpm':>5s} {'node CPU':>9s} {'core RTF':>9s} {'node RTF':>9s} {'lat p50':>8s} {'lat p99':>8s} "
                 f"{'skips':>5s} {'published':>10s} {'logged':>8s} {'lost':>6s} {'unacc.':>7s}")
             for rpm in rpms:
-                r = _one_speed(tmp, model, params, peer, rpm, bar, rate, seconds, settle)
-                result["rows"].append(r)
-                out(f"  {rpm:5g} {100 * r['node_cpu_fraction']:8.0f}% {r['core_rtf']:9.2f} {r['node_rtf']:9.2f} "
-                    f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['skips'] or 0:5d} {r['published']:10d} "
-                    f"{r['logged']:8d} {r['lost']:6d} {r['unaccounted']:7d}   "
-                    + " ".join(f"{k} {100 * v:.0f}%" for k, v in r["thread_cpu_fraction"].items()))
+                runs = []
+                for k in range(repeats):
+                    runs.append(_one_speed(tmp, model, params, peer, rpm, bar, rate, seconds, settle, k))
+                    out(_line(runs[-1]))
+                result["rows"].extend(runs)
+                if repeats > 1:
+                    result["medians"].append(median_row(runs))
+                    out(_line(result["medians"][-1]))
         finally:
             peer.close()
             stop_busy(busy_procs)
@@ -324,8 +357,10 @@ def cmd_bench_node(args) -> int:
         raise InputError("--node-rate", args.node_rate, "[1, 20000] Hz")
     if not 0 <= args.node_busy <= 64:
         raise InputError("--node-busy", args.node_busy, "0 to 64 processes")
+    if not 1 <= args.node_repeats <= 100:
+        raise InputError("--node-repeats", args.node_repeats, "1 to 100 runs per speed")
     res = run(model=args.node_model, rpms=rpms, seconds=args.node_seconds, rate=args.node_rate,
-              busy=args.node_busy, params=tuple(args.node_param or ()))
+              busy=args.node_busy, params=tuple(args.node_param or ()), repeats=args.node_repeats)
     if args.json:
         Path(args.json).write_text(json.dumps({"node": res}, indent=2))
         print(f"wrote {args.json}")

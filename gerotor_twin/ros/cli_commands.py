@@ -34,6 +34,9 @@ def add_parser(subparsers) -> None:
                        help="bench node: input rate of the separate publisher process, per input [Hz]")
     bench.add_argument("--node-busy", type=int, default=0,
                        help="bench node: CPU-bound processes to run beside it (a loaded machine)")
+    bench.add_argument("--node-repeats", type=int, default=1,
+                       help="bench node: runs per speed, each with a fresh node (> 1: a median line too; the "
+                            "node CPU varies by several points between starts)")
     bench.add_argument("--node-param", action="append", metavar="NAME:=VALUE",
                        help="bench node: extra twin_node parameter (repeatable)")
     previous = bench.get_default("func")
