@@ -30,9 +30,10 @@ def _independent(msgtype: str):
 
 
 def _same(fast, ref, path="msg"):
-    """Field-by-field equality of a fast named tuple and an mcap_ros2 namespace."""
-    if hasattr(fast, "_fields"):
-        for f in fast._fields:
+    """Field-by-field equality of a fast message object and an mcap_ros2 namespace."""
+    if hasattr(fast, "__slots__") and not isinstance(fast, (list, float, int, str)):
+        assert not isinstance(fast, tuple), path             # walkers take tuples for arrays
+        for f in fast.__slots__:
             _same(getattr(fast, f), getattr(ref, f), f"{path}.{f}")
     elif isinstance(fast, list):
         assert len(fast) == len(ref), path

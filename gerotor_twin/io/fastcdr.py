@@ -8,7 +8,7 @@ geometry_msgs/Vector3Stamped (~1 µs against 7–30 µs).
 Decoding: the bench inputs (sensor_msgs/JointState, FluidPressure,
 Temperature, std_msgs/Float64) and Vector3Stamped by ``struct`` at fixed
 offsets, ~1–3 µs against 8–14 µs for ``mcap_ros2``'s dynamic decoder, into
-small named tuples with the message's field names.  Anything that is not
+small slotted objects with the message's field names.  Anything that is not
 little-endian CDR of the expected shape goes to the generic decoder
 (:func:`gerotor_twin.io.decode.decode`), which gives the error message.
 
@@ -25,7 +25,7 @@ References
 from __future__ import annotations
 
 import struct
-from typing import Any, Callable, NamedTuple
+from typing import Any, Callable
 
 import numpy as np
 
@@ -97,57 +97,95 @@ def encode(msgtype: str, msg: Any) -> bytes:
 
 
 # ------------------------------------------------------------------ decoding
-class Stamp(NamedTuple):
+class _Message:
+    """A decoded message: slotted attributes named like the ``.msg`` fields (as ``mcap_ros2``'s classes).
+
+    Deliberately not a tuple: code that walks messages treats tuples as arrays.
+    """
+    __slots__ = ()
+
+    def __eq__(self, other):
+        return type(other) is type(self) and all(getattr(self, n) == getattr(other, n) for n in self.__slots__)
+
+    def __repr__(self):
+        return f"{type(self).__name__}({', '.join(f'{n}={getattr(self, n)!r}' for n in self.__slots__)})"
+
+
+class Stamp(_Message):
     """builtin_interfaces/Time."""
-    sec: int
-    nanosec: int
+    __slots__ = ("sec", "nanosec")
+
+    def __init__(self, sec, nanosec):
+        self.sec = sec
+        self.nanosec = nanosec
 
 
-class Header(NamedTuple):
+class Header(_Message):
     """std_msgs/Header."""
-    stamp: Stamp
-    frame_id: str
+    __slots__ = ("stamp", "frame_id")
+
+    def __init__(self, stamp, frame_id):
+        self.stamp = stamp
+        self.frame_id = frame_id
 
 
-class JointState(NamedTuple):
+class JointState(_Message):
     """sensor_msgs/JointState (positions [rad or m], velocities [rad/s or m/s], efforts [N·m or N])."""
-    header: Header
-    name: list
-    position: list
-    velocity: list
-    effort: list
+    __slots__ = ("header", "name", "position", "velocity", "effort")
+
+    def __init__(self, header, name, position, velocity, effort):
+        self.header = header
+        self.name = name
+        self.position = position
+        self.velocity = velocity
+        self.effort = effort
 
 
-class FluidPressure(NamedTuple):
+class FluidPressure(_Message):
     """sensor_msgs/FluidPressure [Pa]."""
-    header: Header
-    fluid_pressure: float
-    variance: float
+    __slots__ = ("header", "fluid_pressure", "variance")
+
+    def __init__(self, header, fluid_pressure, variance):
+        self.header = header
+        self.fluid_pressure = fluid_pressure
+        self.variance = variance
 
 
-class Temperature(NamedTuple):
+class Temperature(_Message):
     """sensor_msgs/Temperature [°C]."""
-    header: Header
-    temperature: float
-    variance: float
+    __slots__ = ("header", "temperature", "variance")
+
+    def __init__(self, header, temperature, variance):
+        self.header = header
+        self.temperature = temperature
+        self.variance = variance
 
 
-class Float64(NamedTuple):
+class Float64(_Message):
     """std_msgs/Float64."""
-    data: float
+    __slots__ = ("data",)
+
+    def __init__(self, data):
+        self.data = data
 
 
-class Vector3(NamedTuple):
+class Vector3(_Message):
     """geometry_msgs/Vector3."""
-    x: float
-    y: float
-    z: float
+    __slots__ = ("x", "y", "z")
+
+    def __init__(self, x, y, z):
+        self.x = x
+        self.y = y
+        self.z = z
 
 
-class Vector3Stamped(NamedTuple):
+class Vector3Stamped(_Message):
     """geometry_msgs/Vector3Stamped."""
-    header: Header
-    vector: Vector3
+    __slots__ = ("header", "vector")
+
+    def __init__(self, header, vector):
+        self.header = header
+        self.vector = vector
 
 
 def _string(data: bytes, o: int) -> tuple[str, int]:
@@ -219,14 +257,14 @@ def _vector3_stamped(data: bytes) -> Vector3Stamped:
     return Vector3Stamped(header, Vector3(*_3F64.unpack_from(data, o)))
 
 
-#: ``pkg/msg/Type`` -> fast decoder (little-endian CDR bytes -> named tuple).
+#: ``pkg/msg/Type`` -> fast decoder (little-endian CDR bytes -> message object).
 FAST_DECODERS: dict[str, Callable[[bytes], Any]] = {
     m.JOINT_STATE: _joint_state, m.FLUID_PRESSURE: _fluid_pressure, m.TEMPERATURE: _temperature,
     m.FLOAT64: _float64, m.VECTOR3_STAMPED: _vector3_stamped}
 
 
 def decode_fast(msgtype: str, data: bytes) -> Any | None:
-    """The message as a named tuple, or None (another type, big-endian or malformed: use the generic decoder)."""
+    """The message as a slotted object, or None (another type, big-endian or malformed: use the generic decoder)."""
     fast = FAST_DECODERS.get(msgtype)
     if fast is None or data[:2] != _LE:
         return None
