@@ -54,14 +54,14 @@ def readability_problems(fig) -> list[str]:
 def captured(monkeypatch):
     """Every figure the report renders, checked before it becomes a PNG."""
     seen = []
-    png = F._png
+    png = F.figure_png
 
     def checking_png(fig):
         shown = [ax for ax in fig.axes if ax.get_visible()]
         seen.append(([ax.get_title() for ax in shown], readability_problems(fig),
                      [len(ax.get_lines()) for ax in shown]))
         return png(fig)
-    monkeypatch.setattr(F, "_png", checking_png)
+    monkeypatch.setattr(F, "figure_png", checking_png)
     return seen
 
 

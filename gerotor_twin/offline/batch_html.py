@@ -11,8 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..report.figures import _png  # noqa: E402
-from ..report.html import _CSS, figure  # noqa: E402
+from ..report.figures import figure_png  # noqa: E402
+from ..report.html import PAGE_CSS, figure  # noqa: E402
 
 __all__ = ["fleet_page"]
 
@@ -49,7 +49,7 @@ def fig_errors(ok: list[dict]) -> bytes:
         a.axhline(0, color="k", lw=0.6)
         a.grid(alpha=0.3, axis="y")
     fig.tight_layout()
-    return _png(fig)
+    return figure_png(fig)
 
 
 def _row(out: Path, r: dict) -> str:
@@ -106,7 +106,7 @@ def fleet_page(out: Path, rows: list[dict], info: list[str]) -> str:
             + ("<th class='l'>fitted clearance factor [95 %]</th>" if fitted else "") + "<th class='l'>notes</th></tr>")
     body = "".join(_row(out, r) for r in rows)
     return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>Fleet summary</title><style>{_CSS}</style></head>
+<html lang="en"><head><meta charset="utf-8"><title>Fleet summary</title><style>{PAGE_CSS}</style></head>
 <body><h1>Fleet summary: twin vs bench, one row per recording</h1>
 <div class="headline">{'<br>'.join(_e(i) for i in info)}</div>
 <table>{head}{body}</table>

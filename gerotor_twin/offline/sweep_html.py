@@ -15,8 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..report.figures import _png  # noqa: E402
-from ..report.html import _CSS, figure  # noqa: E402
+from ..report.figures import figure_png  # noqa: E402
+from ..report.html import PAGE_CSS, figure  # noqa: E402
 
 __all__ = ["sweep_page", "numeric_params"]
 
@@ -79,7 +79,7 @@ def fig_efficiency_map(ok: list[dict], x: str, y: str) -> bytes:
     ax.set_xlabel(x)
     ax.set_ylabel(y)
     ax.grid(alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 def fig_ripple(ok: list[dict], x: str, group: str | None) -> bytes:
@@ -96,7 +96,7 @@ def fig_ripple(ok: list[dict], x: str, group: str | None) -> bytes:
     if group:
         ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 def fig_parallel(ok: list[dict], params: list[str], outputs: list[str]) -> bytes:
@@ -118,7 +118,7 @@ def fig_parallel(ok: list[dict], params: list[str], outputs: list[str]) -> bytes
     ax.set_yticklabels(["min", "max"])
     ax.set_title("parallel coordinates (colour: volumetric efficiency)", fontsize=9)
     fig.tight_layout()
-    return _png(fig)
+    return figure_png(fig)
 
 
 def _fmt(v) -> str:
@@ -167,7 +167,7 @@ def sweep_page(title: str, records: list[dict], params: list[str], outputs: list
                         f"<td class='l'>{_e(r['reason'])}</td></tr>" for r in failed[:200])
     body = "".join(f"<h2>{_e(h)}</h2>{f}" for h, f in figs)
     return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title><style>{_CSS}</style></head>
+<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title><style>{PAGE_CSS}</style></head>
 <body><h1>{_e(title)}</h1>
 <div class="headline">{'<br>'.join(_e(i) for i in info)}</div>
 {body}

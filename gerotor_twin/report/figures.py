@@ -19,7 +19,7 @@ from ..units import P_ATM, pa_abs_to_bar_gauge  # noqa: E402
 from .analysis import Plateau, revolution_phase  # noqa: E402
 from .data import TwinData  # noqa: E402
 
-__all__ = ["fig_efficiency_map", "fig_plateau_errors", "fig_waveforms", "fig_trajectory", "fig_gaps",
+__all__ = ["figure_png", "fig_efficiency_map", "fig_plateau_errors", "fig_waveforms", "fig_trajectory", "fig_gaps",
            "gap_profile", "group_points", "group_plateaus", "folded_waveform", "RC", "DPI", "MAX_WIDTH_IN"]
 
 LPM = 6e4          # m³/s -> L/min
@@ -42,7 +42,8 @@ def _styled(fn):
     return wrapper
 
 
-def _png(fig) -> bytes:
+def figure_png(fig) -> bytes:
+    """The figure as PNG bytes (the report's DPI, no software tag, so files are reproducible); closes it."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
     plt.close(fig)
@@ -117,7 +118,7 @@ def fig_efficiency_map(comps: list[dict]) -> bytes:
         ax.set_ylabel("delivery p [bar g]")
     if sc is not None:
         fig.colorbar(sc, ax=flat[:n], label="volumetric efficiency [%]", shrink=0.9)
-    return _png(fig)
+    return figure_png(fig)
 
 
 @_styled
@@ -156,7 +157,7 @@ def fig_plateau_errors(plateaus: list[Plateau], comps: list[dict], verdicts: lis
     else:
         a2.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=20, integer=True))
     fig.legend(*a1.get_legend_handles_labels(), loc="outside lower center", ncols=min(3, 1 + 2 * len(comps)))
-    return _png(fig)
+    return figure_png(fig)
 
 
 def group_points(rpm: list[float], bar: list[float], rpm_rel: float = 0.02, bar_abs: float = 0.5) -> list[list[int]]:
@@ -272,7 +273,7 @@ def fig_waveforms(twins: list[TwinData], plateaus: list[Plateau]) -> bytes | Non
     for ax in grid[:, 0]:
         ax.set_ylabel("chamber p [bar g]")
     _figure_legend(fig, axes, twins, any(len(g) > 1 for g in groups))
-    return _png(fig)
+    return figure_png(fig)
 
 
 @_styled
@@ -310,7 +311,7 @@ def fig_trajectory(twins: list[TwinData], plateaus: list[Plateau], clearance_m: 
     axes[1].set_xlim(mid[0] - half, mid[0] + half)
     axes[1].set_ylim(mid[1] - half, mid[1] + half)
     axes[1].set_title("zoom on the trajectory")
-    return _png(fig)
+    return figure_png(fig)
 
 
 def gap_profile(tw: TwinData, p: Plateau, config, angles: np.ndarray, pump=None) -> np.ndarray | None:
@@ -388,4 +389,4 @@ def fig_gaps(twins: list[TwinData], plateaus: list[Plateau], config) -> bytes | 
     for ax in grid[:, 0]:
         ax.set_ylabel("tip gap [µm]")
     _figure_legend(fig, axes, twins, any(len(g) > 1 for g in groups))
-    return _png(fig)
+    return figure_png(fig)

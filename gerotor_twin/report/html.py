@@ -11,9 +11,10 @@ from .interactive import assets, data_script, panel_div
 from .panels import Image, Table, TimeSeries
 from .tables import cell, csv_data_uri, table_csv
 
-__all__ = ["render", "figure", "table_html", "download_link"]
+__all__ = ["render", "figure", "table_html", "download_link", "PAGE_CSS"]
 
-_CSS = """
+#: The stylesheet every HTML page of the project shares (report, sweep, batch).
+PAGE_CSS = """
 body{font-family:system-ui,sans-serif;font-size:15px;margin:1.5em auto;max-width:1100px;padding:0 12px;color:#222}
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:1.6em;border-bottom:1px solid #ccc}h3{font-size:1.05em}
 table{border-collapse:collapse;font-size:13px;margin:0.5em 0}
@@ -133,7 +134,7 @@ def render(title: str, headline: list[str], notes: list[str], blocks: list, pane
     notes_html = "".join(f"<p class='warn'>{_e(n)}</p>" for n in notes)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{_e(title)}</title><style>{css}</style><style>{_CSS}</style></head>
+<title>{_e(title)}</title><style>{css}</style><style>{PAGE_CSS}</style></head>
 <body>
 <h1>{_e(title)}</h1>
 <div class="headline">{'<br>'.join(_e(h) for h in headline)}</div>
