@@ -55,7 +55,7 @@ N_COUNTERS = 8
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING = range(3)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP = range(4)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 
@@ -129,6 +129,14 @@ def _first_stage(y, th, km, op, ws, integrals):
     """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
     _error_weights(km, op, ws)
+    cap = math.inf
+    if op.rate_dp > 0.0:    # numerics.rate_fraction: sub-step cap from the fastest chamber pressure, read in pressure_step
+        r = 0.0
+        for j in range(km.pc.n):
+            r = max(r, ws.beta[j] * abs(ws.f0[j]))
+        if r > 0.0:
+            cap = op.rate_dp / r
+    ws.ctrl[CT_HCAP] = cap
     h = ws.ctrl[CT_PENDING]
     for i in range(ws.flows.shape[0]):
         if h > 0.0 and not (i == FL_DELIVERY and not km.pc.restriction):
@@ -191,6 +199,9 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     while done < big_h * (1.0 - 1e-12):
         h = min(h, big_h - done)
         th = theta + op.omega * done
+        if ws.ctrl[CT_FRESH] == 0.0:
+            _first_stage(y, th, km, op, ws, integrals)
+        h = min(max(min(h, ws.ctrl[CT_HCAP]), h_min), big_h - done)
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])

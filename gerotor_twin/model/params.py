@@ -103,6 +103,7 @@ class Operating(NamedTuple):
     rho_s: float        #: ρ(p_s)/ρ₀ [-]
     s_d: float          #: ln(ρ(p_d)/ρ₀) [-]
     dp_ref: float       #: pressure scale of the error measure, max(p_d − p_s, 1 bar) [Pa]
+    rate_dp: float = 0.0  #: sub-step ≤ rate_dp / max |dp/dt| of the chambers (numerics.rate_fraction × dp_ref; 0: off) [Pa]
 
 
 class Workspace(NamedTuple):
@@ -131,8 +132,9 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (3,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
-                            #: length of the accepted sub-step whose flow integral is pending [s]
+    ctrl: np.ndarray        #: (4,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+                            #: length of the accepted sub-step whose flow integral is pending [s];
+                            #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s]
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
 
@@ -190,10 +192,11 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
     return KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air))
 
 
-def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:
-    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa]."""
+def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
+    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction)."""
+    dp_ref = max(p_d - p_s, 1e5)
     return Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
-                     s_d=log_density_of(p_d, km.eos), dp_ref=max(p_d - p_s, 1e5))
+                     s_d=log_density_of(p_d, km.eos), dp_ref=dp_ref, rate_dp=float(rate_fraction) * dp_ref)
 
 
 def workspace(n: int) -> Workspace:
@@ -206,5 +209,5 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 6)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(3),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(4),
                      disp=v(4))

@@ -194,7 +194,8 @@ class PumpModel:
         rec = np.zeros((n, K.N_REC))
         rec_p = np.zeros((n, self.N))
         rec_g = np.zeros((n, self.N))
-        op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery)
+        op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery,
+                       self.config.numerics.rate_fraction)
         if not self.restriction_mode:
             y[self.N] = op.s_d
         theta, t = state.theta, state.t

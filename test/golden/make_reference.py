@@ -15,6 +15,9 @@ from gerotor_twin.config import load_config
 from gerotor_twin.model.accuracy import REFERENCE_REFINEMENT, REFERENCE_TOLERANCE, reference_revolution
 
 POINTS = ((1000.0, 27.5), (2000.0, 27.5), (3000.0, 27.5))     # rpm, bar gauge
+#: Below the rated pressure: where the defaults miss the budget and the rate-capped preset
+#: (gerotor_twin.model.accuracy.LOW_PRESSURE_NUMERICS) must meet it.
+LOW_POINTS = ((3000.0, 5.0), (3000.0, 15.0))
 HERE = Path(__file__).resolve().parent
 
 
@@ -26,7 +29,7 @@ def main() -> None:
     cfg = load_config()
     rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                          cwd=HERE).stdout.strip()
-    for rpm, bar in POINTS:
+    for rpm, bar in POINTS + LOW_POINTS:
         ref = reference_revolution(cfg, rpm, bar, "mobility")
         ref.save(path(rpm, bar), rpm=rpm, bar=bar, model="mobility", tolerance=REFERENCE_TOLERANCE,
                  refinement=REFERENCE_REFINEMENT, git=rev, date=datetime.date.today().isoformat())
