@@ -37,6 +37,7 @@ def test_packaged_params_file_is_valid_and_complete():
     (("-p", "bearing_model:=7"), "quote it"),
     (("-p", "use_sim_time:=maybe"), "use_sim_time = 'maybe' is invalid; allowed: a bool"),
     (("-p", "log_compression:=gzip"), "zstd | lz4 | none"),
+    (("-p", "input_coalesce_s:=0.1"), "input_coalesce_s = 0.1 is invalid; allowed: [0, 0.05] s"),
 ])
 def test_p_overrides_validated_like_the_file(args, needle):
     """Behaviour: the -p value wins over the file (rcl precedence) and is validated, whatever its type."""

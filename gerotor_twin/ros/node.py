@@ -499,7 +499,8 @@ def _executor(node: TwinNode):
     kind = node.executor_kind
     if kind == "waitset":
         from gerotor_twin.ros.receiver import InputReceiver
-        return InputReceiver(node.context, node.subs, node.input_callbacks, node.drain_batch)
+        return InputReceiver(node.context, node.subs, node.input_callbacks, node.drain_batch,
+                             coalesce_s=node.prm["input_coalesce_s"])
     ex = _rclpy_executor(kind)
     ex.add_node(node.input_node)
     return ex

@@ -66,6 +66,9 @@ PARAMETERS: tuple[Param, ...] = (
           0.0, 120.0),
     Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
                                      "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
+    Param("input_coalesce_s", 0.002, "receiving thread: after a wake-up, wait this long, then take every "
+                                     "message waiting, so one wake-up takes a batch [s] (0 = take at once; "
+                                     "delays receive stamps and logging by at most this)", 0.0, 0.05),
     Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",
           0.0, 60.0),
     Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),
@@ -211,7 +214,7 @@ def fixed_reason(name: str) -> str:
                "(switching it would silently stop all outputs)")
     elif name in ("pump_config", "bearing_model"):
         why = "the pump model is built from it at start"
-    elif name.endswith("_topic") or name == "input_queue_depth":
+    elif name.endswith("_topic") or name in ("input_queue_depth", "input_coalesce_s"):
         why = "the subscriptions are created with it at start"
     elif name.startswith("log_"):
         why = "the MCAP log is opened with it at start"
