@@ -147,15 +147,14 @@ def _first_stage(y, th, km, op, ws, integrals):
 
 
 @njit(inline="always")
-def ros2_step(y, th, h, km, op, ws, integrals):
+def ros2_step(y, th, h, km, op, ws):
     """One ROS2 sub-step of size h [s] from (y, θ): ``ws.ynew`` and the embedded error ``ws.err``.
 
-    Uses ``ws.f0``/``ws.jac`` when ``ws.ctrl[CT_FRESH]`` says they hold the RHS at
-    (y, θ, ``ws.gaps0``); the second stage is at θ + ωh with ``ws.gaps1``.
+    ``ws.f0``/``ws.jac`` must hold the RHS at (y, θ, ``ws.gaps0``) (:func:`pressure_step`
+    evaluates the first stage before it sizes the sub-step); the second stage is at θ + ωh
+    with ``ws.gaps1``.
     """
     n1 = y.shape[0]
-    if ws.ctrl[CT_FRESH] == 0.0:
-        _first_stage(y, th, km, op, ws, integrals)
     for i in range(n1):
         for k in range(n1):
             ws.lu[i, k] = -GAMMA * h * ws.jac[i, k]
@@ -199,13 +198,13 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     while done < big_h * (1.0 - 1e-12):
         h = min(h, big_h - done)
         th = theta + op.omega * done
-        if ws.ctrl[CT_FRESH] == 0.0:
+        if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ): also the rate cap
             _first_stage(y, th, km, op, ws, integrals)
         h = min(max(min(h, ws.ctrl[CT_HCAP]), h_min), big_h - done)
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
-        en = ros2_step(y, th, h, km, op, ws, integrals)
+        en = ros2_step(y, th, h, km, op, ws)
         if en <= 1.0 or h <= h_min:
             finite = True
             for i in range(n1):

@@ -75,10 +75,11 @@ class InputReceiver:
         ready = ws.get_ready_entities("subscription")
         if not ready:
             return
-        if self._coalesce_s > 0.0:
-            time.sleep(self._coalesce_s)      # what arrives meanwhile is taken below, in this wake-up
+        waited = self._coalesce_s > 0.0
+        if waited:
+            time.sleep(self._coalesce_s)      # what arrives meanwhile, on any input, is taken below
         for kind, sub in self._subs:
-            if sub.handle.pointer in ready:
+            if waited or sub.handle.pointer in ready:
                 self._take(kind, sub)
 
     def _take(self, kind: str, sub) -> None:
