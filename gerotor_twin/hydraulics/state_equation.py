@@ -45,7 +45,7 @@ from .._jit import njit
 from .fluid import Fluid, bulk_modulus, log_density
 from .mixture import AirContent, mixture_bulk_modulus, mixture_log_density, mixture_pressure, mixture_table
 
-__all__ = ["StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
+__all__ = ["exp_small", "StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
            "BAND_NODES", "MIXTURE_NODES", "PAPER", "MIXTURE", "FLUID_MODELS", "convert_log_density",
            "with_liquid_modulus"]
 
@@ -100,6 +100,14 @@ def log_density_of(p, eos):
     if p >= eos.p_hi:
         return eos.s_hi + (p - eos.p_hi) / eos.beta_liquid
     return log_density(p, eos.beta_liquid, eos.ratio, eos.p_atm, eos.band, eos.p_vap)
+
+
+@njit(inline="always")
+def exp_small(s):
+    """ρ/ρ₀ = e^s of a log-density s: a Taylor polynomial for |s| < 0.01 (relative error < 2e-15), exp otherwise."""
+    if -0.01 < s < 0.01:
+        return 1.0 + s * (1.0 + s * 0.5 * (1.0 + s / 3.0 * (1.0 + 0.25 * s * (1.0 + 0.2 * s))))
+    return math.exp(s)
 
 
 @njit(inline="always")

@@ -33,7 +33,7 @@ from .._jit import njit
 from ..geometry.tables import AD, AS, DV, KREL, V, VR
 from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import port_orifice_flow
-from ..hydraulics.state_equation import bulk_modulus_of, state_of
+from ..hydraulics.state_equation import exp_small, state_of
 from .contact import column, locate
 from .volumes import displace_chamber, volumes_moved
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
@@ -66,26 +66,17 @@ def chamber_geometry(theta, tab, n, geo, disp, acc):
 
 
 @njit(inline="always")
-def _exp_small(s):
-    """e^s: a Taylor polynomial for |s| < 0.01 (relative error < 2e-15), exp otherwise."""
-    if -0.01 < s < 0.01:
-        return 1.0 + s * (1.0 + s * 0.5 * (1.0 + s / 3.0 * (1.0 + 0.25 * s * (1.0 + 0.2 * s))))
-    return math.exp(s)
-
-
-@njit(inline="always")
 def volume_states(y, km, op, ws):
     """Pressure [Pa], bulk modulus [Pa] and ρ/ρ₀ of every volume from the log-densities."""
     n = km.pc.n
     for i in range(n + 1):
-        if i == n and not km.pc.restriction:
-            s = op.s_d                                   # imposed delivery pressure
+        if i == n and not km.pc.restriction:             # imposed delivery pressure (Operating)
             ws.p[i] = op.p_d
-            ws.beta[i] = bulk_modulus_of(op.p_d, km.eos)
+            ws.beta[i] = op.beta_d
+            ws.rho[i] = op.rho_d
         else:
-            s = y[i]
-            ws.p[i], ws.beta[i] = state_of(s, km.eos)
-        ws.rho[i] = _exp_small(s)
+            ws.p[i], ws.beta[i] = state_of(y[i], km.eos)
+            ws.rho[i] = exp_small(y[i])
         ws.acc[i] = 0.0
 
 

@@ -27,7 +27,8 @@ from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from ..hydraulics.orifice import ORIFICE_LAWS
-from ..hydraulics.state_equation import StateEquation, log_density_of, state_equation, with_liquid_modulus
+from ..hydraulics.state_equation import (StateEquation, bulk_modulus_of, exp_small, log_density_of, state_equation,
+                                         with_liquid_modulus)
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
@@ -103,6 +104,8 @@ class Operating(NamedTuple):
     rho_s: float        #: ρ(p_s)/ρ₀ [-]
     s_d: float          #: ln(ρ(p_d)/ρ₀) [-]
     dp_ref: float       #: pressure scale of the error measure, max(p_d − p_s, 1 bar) [Pa]
+    beta_d: float = 0.0  #: β(p_d), bulk modulus at the delivery pressure [Pa]
+    rho_d: float = 1.0   #: e^{s_d} = ρ(p_d)/ρ₀ [-]
     rate_dp: float = 0.0  #: sub-step ≤ rate_dp / max |dp/dt| of the chambers (numerics.rate_fraction × dp_ref; 0: off) [Pa]
 
 
@@ -195,8 +198,10 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
     """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction)."""
     dp_ref = max(p_d - p_s, 1e5)
+    s_d = log_density_of(p_d, km.eos)
     return Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
-                     s_d=log_density_of(p_d, km.eos), dp_ref=dp_ref, rate_dp=float(rate_fraction) * dp_ref)
+                     s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d),
+                     rate_dp=float(rate_fraction) * dp_ref)
 
 
 def workspace(n: int) -> Workspace:
