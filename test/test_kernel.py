@@ -28,12 +28,13 @@ def warm(cfg):
     return m, inp, s
 
 
-def _rhs(m, op, y, theta, gaps):
+def _rhs(m, op, y, theta, gaps, km=None):
+    """(f, ∂f/∂y, ∂f/∂t) of the kernel's right-hand side (``jac``'s last column is ∂f/∂t)."""
     ws = m._ws
     f = np.empty(m.N + 1)
-    jac = np.empty((m.N + 1, m.N + 1))
-    F.rhs(y, theta, gaps, m.kernel, op, ws, f, jac, True)
-    return f, jac.copy()
+    jac = np.empty((m.N + 1, m.N + 2))
+    F.rhs(y, theta, gaps, m.kernel if km is None else km, op, ws, f, jac, True)
+    return f, jac[:, :-1].copy(), jac[:, -1].copy()
 
 
 def _fd_jacobian(m, op, y, theta, gaps):
@@ -54,7 +55,7 @@ def _check_jacobian(m, op, y, theta, gaps):
     The analytic Jacobian is exact (flows and density ratios, flows.transfer); what is left is
     the difference quotient's own error, far below the bound 1e-4 of the row scale.
     """
-    _, jac = _rhs(m, op, y, theta, gaps)
+    _, jac, _ = _rhs(m, op, y, theta, gaps)
     fd = _fd_jacobian(m, op, y, theta, gaps)
     rows = range(m.N + 1) if m.restriction_mode else range(m.N)
     for j in rows:
@@ -77,6 +78,59 @@ def test_jacobian_matches_finite_differences_in_the_liquid_and_at_port_edges(war
         edge_seen |= any(0 < a < 0.05 * amax for pair in areas for a in pair)
         _check_jacobian(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])
     assert edge_seen, "no angle with a port edge (open area < 5 % of its maximum) was checked"
+
+
+@pytest.mark.parametrize("law", ["flow_number", "merritt"])
+def test_area_derivative_of_the_orifice_laws_matches_central_differences(law):
+    """Closed form: ∂Q/∂A = (Q/2 + Δp ∂Q/∂Δp)/A (both laws: Q(Δp/s², s²A) = s Q(Δp, A)) against central
+    differences in A, laminar to turbulent and both flow directions; 0 for a closed port."""
+    from gerotor_twin.hydraulics.orifice import ORIFICE_LAWS, port_orifice_flow
+    lw = ORIFICE_LAWS[law]
+
+    def q(dp, a):
+        return port_orifice_flow(dp, a, lw, 0.7, 1000.0, 0.2, 870.0, 0.04)
+
+    for area in (1e-10, 1e-8, 1e-6, 2e-5):
+        for dp in (-27e5, -3e3, 1.0, 50.0, 1e4, 27e5):
+            qq, dq = q(dp, area)
+            h = 1e-6 * area
+            fd = (q(dp, area + h)[0] - q(dp, area - h)[0]) / (2 * h)
+            assert F.area_derivative(qq, dq, dp, area) == pytest.approx(fd, rel=1e-6, abs=1e-12 * abs(qq) / area)
+    assert F.area_derivative(0.0, 0.0, 1e5, 0.0) == 0.0
+
+
+def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
+    """Behaviour: ∂f/∂t (the last column of ``jac``, non-autonomous ROS2) against ω·(f(θ+δ) − f(θ−δ))/2δ at
+    fixed state and gaps, at several angles among them port edges, each chamber inside one table cell.
+
+    Exact there when what ∂f/∂t leaves out is switched off: the θ-dependence of the tooth-tip flows
+    (``tip_flow_factor`` 0, lateral leakage kept) and of the displaced-volume terms (centred gear)."""
+    m, inp, s = warm
+    km = m.kernel._replace(pc=m.kernel.pc._replace(tip_flow_factor=0.0))
+    op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
+    disp = m._ws.disp.copy()
+    m._ws.disp[:] = 0.0
+    tab = m.tables
+    cell = tab.period / tab.size
+    gaps = m.gaps(s.theta, s.eccentricity)[0]
+    edges = 0
+    try:
+        for theta in np.linspace(s.theta, s.theta + tab.shift, 23):
+            x = [((theta + j * tab.shift) % tab.period) / cell % 1.0 for j in range(m.N)]
+            if min(x) < 0.01 or max(x) > 0.99:
+                continue                       # a chamber on a table node: the slope jumps there
+            d = 1e-4 * cell
+            f_t = _rhs(m, op, s.log_density, theta, gaps, km)[2]
+            fd = inp.omega * (_rhs(m, op, s.log_density, theta + d, gaps, km)[0]
+                              - _rhs(m, op, s.log_density, theta - d, gaps, km)[0]) / (2 * d)
+            scale = np.abs(fd[:m.N]).max()                   # chambers [1/s²]; the delivered volume [m³/s²]
+            assert np.abs(f_t[:m.N] - fd[:m.N]).max() <= 1e-5 * scale, (theta, f_t, fd)
+            assert abs(f_t[m.N] - fd[m.N]) <= 1e-5 * abs(fd[m.N]) + 1e-12, (theta, f_t[m.N], fd[m.N])
+            edges += any(0 < tab.column(c, theta, j) < 0.05 * tab.data[2].max()
+                         for j in range(m.N) for c in ("AS", "AD"))
+    finally:
+        m._ws.disp[:] = disp
+    assert edges, "no angle with a port edge (open area < 5 % of its maximum) was checked"
 
 
 @pytest.fixture(scope="module")

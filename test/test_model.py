@@ -41,12 +41,14 @@ def test_mass_balance_residual_vanishes_with_the_solver_tolerance(cfg):
     """Behaviour: over a periodic revolution, mass in through the suction ports = mass out through the
     delivery ports (the chambers return to the same state).  The log-density formulation has no
     book-keeping error (ρ-weighted flows), so the residual is discretisation error only and falls
-    with the tolerance (measured 5.6e-4 → 6.9e-5 at 1000 rpm, 2.4e-4 → 2.1e-5 at 3000 rpm for
-    2e-6 → 2e-8); a constant-density book-keeping would stall at the compressibility, ≈ 1e-3.
+    with the tolerance (measured with ∂f/∂t in the stages, 2e-8 → 2e-10: 1.9e-5 → 4.9e-7 at 1000 rpm,
+    9.0e-6 → 1.1e-7 at 3000 rpm; at 2e-6 it is already 1.4e-5, the 0.5° output step's share: without
+    ∂f/∂t it was 5.6e-4 → 6.9e-5 for 2e-6 → 2e-8); a constant-density book-keeping would stall at the
+    compressibility, ≈ 1e-3.
     """
     for rpm, bar in ((1000, 27.5), (3000, 10.0)):
         res = []
-        for tol in (2e-6, 2e-8):
+        for tol in (2e-8, 2e-10):
             m = PumpModel(reference_config(cfg, tolerance=tol, max_step_deg=0.5), "fixed")
             o = run_steady(m, rpm, bar, rtol=1e-7, max_revolutions=60).outputs
             res.append(abs(o.port_mass_in - o.port_mass_out) / o.port_mass_in)

@@ -29,9 +29,23 @@ def test_default_numerics_within_budget_of_the_golden_reference(cfg, rpm, bar):
 
 
 @pytest.mark.parametrize("rpm,bar", LOW_POINTS)
+def test_default_numerics_rms_and_efficiency_within_budget_below_the_rated_pressure(cfg, rpm, bar):
+    """Golden: below the rated pressure the defaults (∂f/∂t in the stages, sub-step cap ``rate_fraction``
+    0.3) keep the RMS and η budget; before both, the RMS was 2.73 / 1.70 % at 5 / 15 bar, 3000 rpm.
+    The peak of the closing chamber's spike is not pinned here: it overshoots by up to ≈ 6 % between
+    5 and 15 bar (docs/numerics.md); the preset below meets the whole budget."""
+    ref, meta = Revolution.load(path(rpm, bar))
+    assert (meta["rpm"], meta["bar"], meta["model"]) == (rpm, bar, "mobility")
+    res = run_steady(PumpModel(cfg, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+    err = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
+    for key in ("rms_pressure_error", "efficiency_error"):
+        assert abs(err[key]) <= BUDGET[key], (key, err[key])
+
+
+@pytest.mark.parametrize("rpm,bar", LOW_POINTS)
 def test_rate_capped_numerics_within_budget_below_the_rated_pressure(cfg, rpm, bar):
-    """Golden: the low-pressure preset (sub-step capped by the fastest chamber pressure) meets the budget
-    at 5 and 15 bar, where the defaults do not (RMS 2.7 / 1.7 % at 3000 rpm, docs/numerics.md)."""
+    """Golden: the low-pressure preset (sub-step capped at 0.1 of Δp per step, loose tolerances) meets the
+    whole budget at 5 and 15 bar, the peak included (docs/numerics.md)."""
     ref, meta = Revolution.load(path(rpm, bar))
     assert (meta["rpm"], meta["bar"], meta["model"]) == (rpm, bar, "mobility")
     c = replace(cfg, numerics=replace(cfg.numerics, **LOW_PRESSURE_NUMERICS))
@@ -41,11 +55,12 @@ def test_rate_capped_numerics_within_budget_below_the_rated_pressure(cfg, rpm, b
         assert abs(err[key]) <= bound, (key, err[key])
 
 
-def test_rate_fraction_is_off_by_default_and_wired_through(cfg):
-    """Behaviour: the packaged config leaves the cap off; switched on, it takes more, shorter sub-steps
-    over the same 40 ms at 5 bar (the cap binds on the spikes)."""
+def test_rate_fraction_default_and_wired_through(cfg):
+    """Behaviour: the packaged config and the dataclass default agree (0.3); a tighter cap takes more,
+    shorter sub-steps over the same 40 ms at 5 bar than none (the cap binds on the spikes)."""
+    from gerotor_twin.config import Numerics
     from gerotor_twin.model.pump import Inputs
-    assert cfg.numerics.rate_fraction == 0.0
+    assert cfg.numerics.rate_fraction == Numerics().rate_fraction == 0.3
     inp = Inputs(314.159, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + 5e5)
     steps = {}
     for rf in (0.0, 0.1):

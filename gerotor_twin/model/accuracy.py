@@ -43,11 +43,11 @@ __all__ = ["accuracy", "compare", "Revolution", "reference_revolution", "print_a
 BUDGET = {"rms_pressure_error": 0.01, "efficiency_error": 0.003, "peak_pressure_error": 0.02}
 
 
-#: ``numerics:`` settings that meet :data:`BUDGET` below the rated pressure too (measured 2026-12-01,
-#: mobility and fixed, 1000–3000 rpm, 5–27.5 bar: 29 of 30 points, the 30th a peak of −2.10 % of which
-#: −1.10 % is the 1.5° output grid): the sub-step capped by the fastest chamber pressure
-#: (``rate_fraction``) does the work the error estimate misses, so the tolerances can be loose.
-#: Costs ≈ 490 sub-steps/rev at 3000 rpm / 27.5 bar (RTF ≈ 10 against 12.5) and 930 at 5 bar.
+#: ``numerics:`` settings for waveform work below the rated pressure (measured 2026-12-01, ∂f/∂t in the
+#: stages, mobility and fixed, 78 points 1000–3000 rpm × 5–27.5 bar: 68 within the whole budget against 65
+#: for the defaults; the failures are the closing chamber's spike peak, RMS ≤ 1.30 %): the sub-step capped
+#: at 0.1 of Δp per step (``rate_fraction``) does the work the error estimate misses, so the tolerances can
+#: be loose.  Costs ≈ 400 sub-steps/rev at 3000 rpm / 27.5 bar (RTF ≈ 11.6 against ≈ 13.8) and 700 at 5 bar.
 LOW_PRESSURE_NUMERICS = {"rate_fraction": 0.1, "tolerance": 0.5, "log_density_tolerance": 1e-3}
 
 REFERENCE_TOLERANCE = 1e-8   #: sub-step tolerance of the reference, on ln(ρ/ρ₀) [-]

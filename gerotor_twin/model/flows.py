@@ -40,17 +40,22 @@ from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICT
                      FL_SUCTION_DELIVERY)
 
 __all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
-           "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR"]
+           "area_derivative", "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV", "N_GEO"]
 
-G_V, G_DV, G_AS, G_AD, G_KREL, G_VR = range(6)     # columns of Workspace.geo
+#: columns of Workspace.geo: V, dV/dθ, A_s, A_d, κ_rel, v_r/ω, and the slopes of the interpolated V, A_s, A_d
+#: and dV/dθ in θ (first stage only: the time derivative of the right-hand side)
+G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)
+N_GEO = 10
 
 
 @njit(inline="always")
-def chamber_geometry(theta, tab, n, geo, disp, acc):
+def chamber_geometry(theta, tab, n, geo, disp, acc, slopes):
     """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``.
 
     V and dV/dθ are those of the outer gear displaced by ``disp`` (:mod:`.volumes`), whose
     squeeze flow goes into ``acc`` (which must be initialised: :func:`volume_states`).
+    ``slopes``: also dV/dθ [m³/rad], dA_s/dθ, dA_d/dθ [m²/rad] and d²V/dθ² [m³/rad²] of the centred
+    gear set as the slopes of the table's linear interpolation (exact for the interpolated columns).
     """
     moved = volumes_moved(disp)
     for j in range(n):
@@ -61,6 +66,11 @@ def chamber_geometry(theta, tab, n, geo, disp, acc):
         geo[j, G_AD] = column(tab, AD, i0, i1, f)
         geo[j, G_KREL] = column(tab, KREL, i0, i1, f)
         geo[j, G_VR] = column(tab, VR, i0, i1, f)
+        if slopes:
+            geo[j, G_SV] = (tab.rows[i1, V] - tab.rows[i0, V]) * tab.scale
+            geo[j, G_DAS] = (tab.rows[i1, AS] - tab.rows[i0, AS]) * tab.scale
+            geo[j, G_DAD] = (tab.rows[i1, AD] - tab.rows[i0, AD]) * tab.scale
+            geo[j, G_DDV] = (tab.rows[i1, DV] - tab.rows[i0, DV]) * tab.scale
         if moved:                                   # micro_motion.chamber_volumes: displaced
             displace_chamber(tab, i0, i1, f, j, disp, geo, acc, G_V, G_DV)
 
@@ -102,8 +112,42 @@ def transfer(a, b, q, dq, ws, jac, want_jac):
 
 
 @njit(inline="always")
+def area_derivative(q, dq, dp, area):
+    r"""∂Q/∂A [m/s] of an orifice flow q [m³/s] with dq = ∂Q/∂Δp [m³/(s·Pa)] at Δp [Pa] and area A [m²].
+
+    Notes
+    -----
+    Both orifice laws (:mod:`gerotor_twin.hydraulics.orifice`) have Q = A v F(Re) with Re built
+    on v = √(2|Δp|/ρ) and D_h ∝ √A, so Q(Δp/s², s²A) = s Q(Δp, A); differentiating at s = 1,
+
+    .. math::
+        \frac{\partial Q}{\partial A} = \frac{Q/2 + \Delta p\,\partial Q/\partial\Delta p}{A}
+
+    (turbulent: Q/A; laminar: 3Q/(2A)).  0 for a closed port (Q ∝ A^{3/2} as A → 0).
+    """
+    if not area > 0.0:
+        return 0.0
+    return (0.5 * q + dp * dq) / area
+
+
+@njit(inline="always")
+def transfer_rate(a, b, q, qt, ws, jac):
+    """∂/∂θ of :func:`transfer` for a flow q from a to b whose θ-derivative at fixed pressures is qt [m³/(s·rad)],
+    into the last column of ``jac`` (densities held)."""
+    u, d = (a, b) if q >= 0.0 else (b, a)
+    st = qt if q >= 0.0 else -qt
+    t = jac.shape[1] - 1
+    jac[d, t] += ws.rho[u] / ws.rho[d] * st
+    jac[u, t] -= st
+
+
+@njit(inline="always")
 def port_flows(km, op, ws, jac, want_jac):
-    """Suction and delivery port → chamber flows, Eq. (21) of [1] with Cd(λ)."""
+    """Suction and delivery port → chamber flows, Eq. (21) of [1] with Cd(λ).
+
+    With ``want_jac`` also their θ-derivative at fixed pressures (through the port areas) into
+    the last column of ``jac``, [m³/(s·rad)] until :func:`assemble` turns it into ∂f/∂t.
+    """
     pc = km.pc
     n = pc.n
     p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
@@ -116,11 +160,15 @@ def port_flows(km, op, ws, jac, want_jac):
         fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
         if want_jac:
             jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
-        q, dq = port_orifice_flow(p[n] - p[j], geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+            jac[j, n + 1] += r * area_derivative(q, dq, op.p_s - p[j], geo[j, G_AS]) * geo[j, G_DAS]
+        dp = p[n] - p[j]
+        q, dq = port_orifice_flow(dp, geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
                                   pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
         fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
         fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
         transfer(n, j, q, dq, ws, jac, want_jac)
+        if want_jac:
+            transfer_rate(n, j, q, area_derivative(q, dq, dp, geo[j, G_AD]) * geo[j, G_DAD], ws, jac)
 
 
 @njit(inline="always")
@@ -170,19 +218,33 @@ def line_flows(km, op, ws, jac, want_jac):
 
 @njit(inline="always")
 def assemble(km, op, ws, f, jac, want_jac):
-    """dy/dt = (Σ ρ-weighted Q − ω dV/dθ) / V into ``f``; the Jacobian rows divided by the volumes."""
+    r"""dy/dt = (Σ ρ-weighted Q − ω dV/dθ) / V into ``f``; the Jacobian rows divided by the volumes.
+
+    With ``want_jac`` also ∂f/∂t at fixed y into the last column of ``jac`` (from ∂(Σ Q)/∂θ booked by
+    :func:`port_flows`):
+
+    .. math::
+        \frac{\partial f_j}{\partial t} = \omega\Big(\frac{\partial_\theta \Sigma Q_j
+            - \omega\, d^2V_j/d\theta^2}{V_j} - f_j \frac{dV_j/d\theta}{V_j}\Big)
+
+    Left out (small, and any approximation keeps ROS2 second order): the θ-dependence of the
+    tooth-tip and lateral flows, of the displaced-volume terms and of the gaps.
+    """
     n = km.pc.n
     n1 = n + 1
+    w = op.omega
     for j in range(n):
         inv = 1.0 / ws.geo[j, G_V]
-        f[j] = (ws.acc[j] - op.omega * ws.geo[j, G_DV]) * inv
+        f[j] = (ws.acc[j] - w * ws.geo[j, G_DV]) * inv
         if want_jac:
+            jac[j, n1] = w * ((jac[j, n1] - w * ws.geo[j, G_DDV]) * inv - f[j] * ws.geo[j, G_SV] * inv)
             for k in range(n1):
                 jac[j, k] *= inv
     if km.pc.restriction:
         inv = 1.0 / km.pc.line_volume
         f[n] = ws.acc[n] * inv
         if want_jac:
+            jac[n, n1] *= w * inv
             for k in range(n1):
                 jac[n, k] *= inv
     else:
@@ -190,13 +252,14 @@ def assemble(km, op, ws, f, jac, want_jac):
         # integrated by the same Rosenbrock stages as the chambers (nothing depends on it)
         f[n] = ws.acc[n]
         if want_jac:
+            jac[n, n1] *= w
             for k in range(n1):
                 jac[k, n] = 0.0
 
 
 @njit(inline="always")
 def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
-    """dy/dt [1/s] into ``f`` (and ∂f/∂y into ``jac`` if ``want_jac``); flows into ``ws.flows``.
+    """dy/dt [1/s] into ``f`` (and ∂f/∂(y, t) into ``jac`` if ``want_jac``); flows into ``ws.flows``.
 
     Parameters
     ----------
@@ -210,12 +273,12 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     """
     n = km.pc.n
     volume_states(y, km, op, ws)
-    chamber_geometry(theta, km.tab, n, ws.geo, ws.disp, ws.acc)
+    chamber_geometry(theta, km.tab, n, ws.geo, ws.disp, ws.acc, want_jac)
     for i in range(ws.flows.shape[0]):
         ws.flows[i] = 0.0
     if want_jac:
         for i in range(n + 1):
-            for k in range(n + 1):
+            for k in range(n + 2):
                 jac[i, k] = 0.0
     port_flows(km, op, ws, jac, want_jac)
     tip_flows(gaps, km, op, ws, jac, want_jac)

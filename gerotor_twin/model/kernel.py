@@ -1,11 +1,22 @@
-"""Compiled stepper of the pump model: ROS2 sub-steps, outer-gear Heun step, output steps.
+r"""Compiled stepper of the pump model: ROS2 sub-steps, outer-gear Heun step, output steps.
 
 The right-hand side lives in :mod:`.flows`, the overlap check in :mod:`.contact`,
 the outer-gear load in :mod:`.loads`, the data model in :mod:`.params`.
 
 Integrator: Verwer's two-stage Rosenbrock method ROS2 (γ = 1 + 1/√2),
 L-stable and second order for any approximation W of the Jacobian [2], with
-adaptive sub-steps inside a fixed output step in shaft angle.  The error of a
+adaptive sub-steps inside a fixed output step in shaft angle.  The right-hand
+side depends on time through the shaft angle, so the stages carry ∂f/∂t [3]:
+
+.. math::
+    (I - γhJ)k_1 = f(t_n, y_n) + γh f_t,\qquad
+    (I - γhJ)k_2 = f(t_n + h, y_n + hk_1) - 2k_1 - γh f_t,\qquad
+    y_{n+1} = y_n + \tfrac32 h k_1 + \tfrac12 h k_2
+
+Without f_t a stiff chamber on a moving quasi-equilibrium (an opening or
+closing port) lags it by ≈ 0.71 of its movement per sub-step (docs/numerics.md).
+The sub-step is also capped so that no chamber pressure moves by more than
+``numerics.rate_fraction`` × (p_delivery − p_suction) in it.  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
@@ -24,6 +35,8 @@ References
 .. [2] J.G. Verwer, E.J. Spee, J.G. Blom, W. Hundsdorfer, "A second-order
    Rosenbrock method applied to photochemical dispersion problems",
    SIAM J. Sci. Comput. 20 (1999) 1456–1480.
+.. [3] E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*,
+   2nd ed., Springer 1996, sec. IV.7 (Rosenbrock methods, non-autonomous form).
 """
 from __future__ import annotations
 
@@ -150,7 +163,7 @@ def _first_stage(y, th, km, op, ws, integrals):
 def ros2_step(y, th, h, km, op, ws):
     """One ROS2 sub-step of size h [s] from (y, θ): ``ws.ynew`` and the embedded error ``ws.err``.
 
-    ``ws.f0``/``ws.jac`` must hold the RHS at (y, θ, ``ws.gaps0``) (:func:`pressure_step`
+    ``ws.f0``/``ws.jac`` must hold the RHS, ∂f/∂y and (last column) ∂f/∂t at (y, θ, ``ws.gaps0``) (:func:`pressure_step`
     evaluates the first stage before it sizes the sub-step); the second stage is at θ + ωh
     with ``ws.gaps1``.
     """
@@ -160,12 +173,15 @@ def ros2_step(y, th, h, km, op, ws):
             ws.lu[i, k] = -GAMMA * h * ws.jac[i, k]
         ws.lu[i, i] += 1.0
     lu_factor(ws.lu, ws.piv)
-    lu_solve(ws.lu, ws.piv, ws.f0, ws.k1)
+    gh = GAMMA * h
+    for i in range(n1):
+        ws.k1[i] = ws.f0[i] + gh * ws.jac[i, n1]           # non-autonomous ROS2: + γh ∂f/∂t
+    lu_solve(ws.lu, ws.piv, ws.k1, ws.k1)
     for i in range(n1):
         ws.y1[i] = y[i] + h * ws.k1[i]
     rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, False)
     for i in range(n1):
-        ws.f1[i] -= 2.0 * ws.k1[i]
+        ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.jac[i, n1]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
     en = 0.0
     for i in range(n1):

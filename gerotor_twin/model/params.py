@@ -115,7 +115,7 @@ class Workspace(NamedTuple):
     beta: np.ndarray        #: (N+1,) bulk moduli [Pa]
     rho: np.ndarray         #: (N+1,) ρ/ρ₀ [-]
     acc: np.ndarray         #: (N+1,) Σ (ρ_up/ρ) Q into each volume [m³/s]
-    geo: np.ndarray         #: (N, 6) V, dV/dθ, A_s, A_d, κ_rel, v_r/ω of each chamber
+    geo: np.ndarray         #: (N, 10) V, dV/dθ, A_s, A_d, κ_rel, v_r/ω and four θ-slopes of each chamber (flows.G_*)
     f0: np.ndarray          #: (N+1,) RHS at the start of a sub-step [1/s]
     f1: np.ndarray          #: (N+1,) RHS at the second stage [1/s]
     k1: np.ndarray
@@ -124,7 +124,7 @@ class Workspace(NamedTuple):
     ynew: np.ndarray
     err: np.ndarray
     wt: np.ndarray          #: (N+1,) error weights [1/-]
-    jac: np.ndarray         #: (N+1, N+1) ∂f/∂y [1/s]
+    jac: np.ndarray         #: (N+1, N+2) ∂f/∂y [1/s] and, in the last column, ∂f/∂t [1/s²]
     lu: np.ndarray          #: (N+1, N+1) LU of I − γ h J
     piv: np.ndarray         #: (N+1,) pivots
     gaps0: np.ndarray       #: (N,) tooth-tip gaps at the sub-step start [m]
@@ -211,8 +211,8 @@ def workspace(n: int) -> Workspace:
     def v(k=n1):
         return np.zeros(k)
 
-    return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 6)), f0=v(), f1=v(), k1=v(), k2=v(),
-                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1)), lu=np.zeros((n1, n1)),
+    return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
+                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + 1)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(4),
                      disp=v(4))

@@ -59,7 +59,8 @@ def _holdout(ev, names, train, held, raw, displacement, opts, say) -> dict:
 
 
 def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
-                   holdout: int = 4, jobs: int | None = None, rcond: float = 0.1, flow_floor: float = 0.0,
+                   holdout: int = 4, jobs: int | None = None, rcond: float = 0.1,
+                   flow_floor: float = C.MODEL_FLOW_SD_REL,
                    detector: DetectorSettings = DetectorSettings(), progress=None) -> dict:
     """Fit ``params`` to the plateaus of ``bags`` (see module doc); the whole result as a dict."""
     say = progress or (lambda s: None)
@@ -79,7 +80,7 @@ def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: 
     (out, wall) = C.run_timed(_run, records, raw, params, model, holdout, jobs, displacement, opts, say)
     out.update({"bags": [str(b) for b in bags], "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                 "prior_config": _display_path(cfg.source), "model": model, "params": list(params), "holdout_every": holdout,
-                "wall_time_s": wall, "software": f"gerotor_twin {__version__}",
+                "wall_time_s": wall, "software": f"gerotor_twin {__version__}", "flow_floor": flow_floor,
                 "plateau_records": [r.as_dict() for r in records], "detector": detector.__dict__})
     out["config"] = apply(raw, params, np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
     return out
@@ -175,12 +176,15 @@ def cmd_calibrate(args) -> int:
     for flag, v in (("--settle-s", args.settle_s), ("--min-plateau-s", args.min_plateau_s)):
         if not (math.isfinite(v) and 0 <= v <= 600):
             raise InputError(flag, v, "[0, 600] s")
+    if not (math.isfinite(args.flow_floor) and 0 <= args.flow_floor <= 0.1):
+        raise InputError("--flow-floor", args.flow_floor, "[0, 0.1] (fraction of the plateau's mean flow)")
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     from ..twin.settings import oil_sensor_tau_arg
     det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
                            oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
     res = calibrate_bags(args.bench, config_path=args.config, params=names, model=args.model,
-                         holdout=args.holdout, jobs=args.jobs, detector=det, progress=say)
+                         holdout=args.holdout, jobs=args.jobs, flow_floor=args.flow_floor, detector=det,
+                         progress=say)
     raw = fitted_config(res)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("# pump config fitted by `gerotor-twin calibrate` (provenance in `calibration`)\n"
@@ -215,6 +219,9 @@ def add_parser(sub) -> None:
     p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's oil thermometer [s]: each plateau's oil temperature is "
                         "its mean reading + S × the readings' slope (default 0 = as read)")
+    p.add_argument("--flow-floor", type=float, default=C.MODEL_FLOW_SD_REL, metavar="REL",
+                   help="model error of a plateau's mean flow, relative, added in quadrature to its standard "
+                        f"error (default {C.MODEL_FLOW_SD_REL:g}; 0: noise only)")
     p.add_argument("--json", metavar="F", help="write the whole result (per plateau, covariance) as JSON")
     p.add_argument("--report", metavar="F.html", help="write a one-page HTML report")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
