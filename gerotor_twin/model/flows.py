@@ -228,7 +228,8 @@ def assemble(km, op, ws, f, jac, want_jac):
             - \omega\, d^2V_j/d\theta^2}{V_j} - f_j \frac{dV_j/d\theta}{V_j}\Big)
 
     Left out (small, and any approximation keeps ROS2 second order): the θ-dependence of the
-    tooth-tip and lateral flows, of the displaced-volume terms and of the gaps.
+    tooth-tip flows (κ_rel, v_r), of the displaced-volume terms and of the gaps; the lateral and line
+    leakages do not depend on θ.
     """
     n = km.pc.n
     n1 = n + 1
