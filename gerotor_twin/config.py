@@ -152,7 +152,7 @@ class Numerics:
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048
-    max_step_deg: float = 2.0
+    max_step_deg: float = 1.5
     max_step_s: float = 2e-4
     tolerance: float = 0.05
     error_measure: str = "pressure"
