@@ -40,12 +40,11 @@ from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICT
                      FL_SUCTION_DELIVERY)
 
 __all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
-           "area_derivative", "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV", "N_GEO"]
+           "area_derivative", "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV"]
 
 #: columns of Workspace.geo: V, dV/dθ, A_s, A_d, κ_rel, v_r/ω, and the slopes of the interpolated V, A_s, A_d
 #: and dV/dθ in θ (first stage only: the time derivative of the right-hand side)
-G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)
-N_GEO = 10
+G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # Workspace.geo has 10 columns
 
 
 @njit(inline="always")

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import InputError
+from ..twin.health import HealthSettings
 from . import identifiability as ident
 from .fit_model import PARAMETERS, PlateauTask, apply, plateau_flow, prior_values
 from .plateaus import PlateauRecord
@@ -31,11 +32,11 @@ from .plateaus import PlateauRecord
 __all__ = ["Evaluator", "FitResult", "fit", "split_holdout", "plateau_errors", "MODEL_FLOW_SD_REL"]
 
 #: Model error of a plateau's mean flow, relative [-], added in quadrature to its standard error: the
-#: figure the health estimator assumes (node parameter ``health_model_sd_rel``).  Without it the
+#: health estimator's default for the same thing (``HealthSettings.model_sd_rel``).  Without it the
 #: intervals hold the noise only: at the true clearances the twin's mean flows differ from the bench
 #: emulator's by −0.6 to +0.01 % (five plateaus, factor 1.2, measured 2026-12-01) at standard
 #: errors of 0.04–0.4 %, and the 95 % interval of the lateral factor missed the truth.
-MODEL_FLOW_SD_REL = 0.003
+MODEL_FLOW_SD_REL = HealthSettings().model_sd_rel
 
 FD_STEP = 0.02          #: finite-difference step of the log-factors [-] (2 % of the value)
 
