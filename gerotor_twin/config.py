@@ -149,6 +149,9 @@ class Numerics:
     ``rate_fraction`` > 0 also caps every sub-step so that no chamber pressure moves by more than
     about ``rate_fraction`` × (p_delivery − p_suction) in it (h ≤ rate_fraction·Δp / max_j |dp_j/dt| at
     its start): it resolves the pressure spikes of the nearly sealed chambers (default 0.3; 0: off).
+    ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
+    four output steps (linear extrapolation of its open area): the pressure spike of the throttled,
+    compressed chamber forms there (default 0.25; 1: no change; pressure measure only).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048
@@ -158,6 +161,7 @@ class Numerics:
     error_measure: str = "pressure"
     log_density_tolerance: float = 2e-4
     rate_fraction: float = 0.3
+    closing_tolerance: float = 0.25
 
     def __post_init__(self):
         if int(self.table_points) != self.table_points or not 256 <= self.table_points <= 65536:
@@ -167,6 +171,7 @@ class Numerics:
         check_range("numerics.tolerance", self.tolerance, 1e-12, 0.5)
         check_range("numerics.log_density_tolerance", self.log_density_tolerance, 1e-12, 1e-1)
         check_range("numerics.rate_fraction", self.rate_fraction, 0.0, 10.0)
+        check_range("numerics.closing_tolerance", self.closing_tolerance, 1e-3, 1.0)
         if self.error_measure not in ERROR_MEASURES:
             raise InputError("numerics.error_measure", self.error_measure, " | ".join(ERROR_MEASURES))
 

@@ -12,6 +12,7 @@ import pytest
 from gerotor_twin.hydraulics.fluid import log_density
 from gerotor_twin.hydraulics.state_equation import log_density_of, pressure_of
 from gerotor_twin.model import flows as F
+from gerotor_twin.model import kernel as K
 from gerotor_twin.model.params import operating
 from gerotor_twin.model.pump import Inputs, PumpModel
 
@@ -29,12 +30,17 @@ def warm(cfg):
 
 
 def _rhs(m, op, y, theta, gaps, km=None):
-    """(f, ∂f/∂y, ∂f/∂t) of the kernel's right-hand side (``jac``'s last column is ∂f/∂t)."""
+    """(f, ∂f/∂y, ∂f/∂t) of the kernel's right-hand side (∂f/∂t: ``jac``'s last column and the closing ports'
+    shares, in full as for a sub-step shorter than their time to close)."""
     ws = m._ws
     f = np.empty(m.N + 1)
-    jac = np.empty((m.N + 1, m.N + 2))
+    jac = np.empty((m.N + 1, m.N + 1 + F.N_JAC_EXTRA))
     F.rhs(y, theta, gaps, m.kernel if km is None else km, op, ws, f, jac, True)
-    return f, jac[:, :-1].copy(), jac[:, -1].copy()
+    F.closing_ports(m.kernel if km is None else km, op, ws, jac, 1.0)      # every closing port
+    ws.jac[:] = jac
+    f_t = np.empty(m.N + 1)
+    F.closing_share(m.N, 1e-30, ws, f_t)
+    return f, jac[:, :m.N + 1].copy(), f_t
 
 
 def _fd_jacobian(m, op, y, theta, gaps):
@@ -104,7 +110,9 @@ def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
     fixed state and gaps, at several angles among them port edges, each chamber inside one table cell.
 
     Exact there when what ∂f/∂t leaves out is switched off: the θ-dependence of the tooth-tip flows
-    (``tip_flow_factor`` 0, lateral leakage kept) and of the displaced-volume terms (centred gear)."""
+    (``tip_flow_factor`` 0, lateral leakage kept) and of the displaced-volume terms (centred gear).
+    Closing ports are among those checked (their share in full, as for a sub-step shorter than their
+    time to close)."""
     m, inp, s = warm
     km = m.kernel._replace(pc=m.kernel.pc._replace(tip_flow_factor=0.0))
     op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
@@ -113,13 +121,13 @@ def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
     tab = m.tables
     cell = tab.period / tab.size
     gaps = m.gaps(s.theta, s.eccentricity)[0]
-    edges = 0
+    edges = closing = 0
     try:
         for theta in np.linspace(s.theta, s.theta + tab.shift, 23):
             x = [((theta + j * tab.shift) % tab.period) / cell % 1.0 for j in range(m.N)]
             if min(x) < 0.01 or max(x) > 0.99:
                 continue                       # a chamber on a table node: the slope jumps there
-            d = 1e-4 * cell
+            d = 1e-3 * cell                    # truncation ≲ 1e-8; 1e-4 let round-off reach 1e-5 in the delivery row
             f_t = _rhs(m, op, s.log_density, theta, gaps, km)[2]
             fd = inp.omega * (_rhs(m, op, s.log_density, theta + d, gaps, km)[0]
                               - _rhs(m, op, s.log_density, theta - d, gaps, km)[0]) / (2 * d)
@@ -128,9 +136,64 @@ def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
             assert abs(f_t[m.N] - fd[m.N]) <= 1e-5 * abs(fd[m.N]) + 1e-12, (theta, f_t[m.N], fd[m.N])
             edges += any(0 < tab.column(c, theta, j) < 0.05 * tab.data[2].max()
                          for j in range(m.N) for c in ("AS", "AD"))
+            closing += int(np.count_nonzero(m._ws.jac[:m.N, [m.N + 1 + F.J_TCS, m.N + 1 + F.J_TCD]] > 0))
     finally:
         m._ws.disp[:] = disp
     assert edges, "no angle with a port edge (open area < 5 % of its maximum) was checked"
+    assert closing, "no closing port was checked"
+
+
+def test_closing_port_share_stops_at_the_closing_angle(warm):
+    """Closed form: a closing port's share of ∂f/∂t is taken in full for a sub-step shorter than its time to
+    close t_c = A / (−dA/dθ · ω) and scaled by t_c/h for a longer one, so that its linearised flow stops at
+    zero area instead of running on through a negative one."""
+    m, inp, s = warm
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    ws, tab, n = m._ws, m.tables, m.N
+    c = n + 1                                   # first column after ∂f/∂y
+    for theta in np.linspace(s.theta, s.theta + tab.shift, 23):
+        _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])
+        g = ws.jac
+        closing = [j for j in range(n) if g[j, c + F.J_TCD] > 0 and g[j, c + F.J_CD] != 0 and g[j, c + F.J_TCS] == 0]
+        if closing:
+            break
+    assert closing, "no closing delivery port with flow in a chamber period"
+    j = closing[0]
+    tc = g[j, c + F.J_TCD]
+    assert tc == pytest.approx(tab.column("AD", theta, j) / (-ws.geo[j, F.G_DAD] * inp.omega), rel=1e-9)
+    base = g[:, c + F.J_FT].copy()
+    short, long = np.empty(n + 1), np.empty(n + 1)
+    F.closing_share(n, 0.5 * tc, ws, short)
+    F.closing_share(n, 4.0 * tc, ws, long)
+    assert short[j] - base[j] == pytest.approx(g[j, c + F.J_CD], rel=1e-12)
+    assert long[j] - base[j] == pytest.approx(0.25 * g[j, c + F.J_CD], rel=1e-12)
+    tcd = g[:n, c + F.J_TCD]
+    assert long[n] - base[n] == pytest.approx(np.sum(g[:n, c + F.J_CDN] * np.minimum(1.0, tcd / (4 * tc))),
+                                              rel=1e-12)
+
+
+def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
+    """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ);
+    for a chamber whose delivery port is closing (flagged by ``closing_ports``) tol is multiplied by
+    ``numerics.closing_tolerance`` (0.25 in the packaged config), elsewhere not."""
+    m, inp, s = warm
+    km = m.kernel
+    pc = km.pc
+    assert pc.closing_tolerance == m.config.numerics.closing_tolerance == 0.25
+    op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
+    ws, n = m._ws, m.N
+    c = n + 1
+    seen = {True: 0, False: 0}
+    for theta in np.linspace(s.theta, s.theta + m.tables.shift, 23):
+        _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])     # closing_ports: ws.jac
+        K._error_weights(km, op, ws)
+        for j in range(n):
+            closing = bool(ws.jac[j, c + F.J_TCD] > 0)
+            tol = pc.tolerance * (pc.closing_tolerance if closing else 1.0)
+            want = max(ws.beta[j] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
+            assert ws.wt[j] == pytest.approx(want, rel=1e-12), (theta, j, closing)
+            seen[closing] += ws.beta[j] / (tol * op.dp_ref) > 1.0 / pc.log_density_tolerance
+    assert seen[True] and seen[False], seen
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import pytest
 from dataclasses import replace
 
 from golden.make_reference import LOW_POINTS, POINTS, path
-from gerotor_twin.model.accuracy import BUDGET, LOW_PRESSURE_NUMERICS, Revolution, compare, reference_revolution
+from gerotor_twin.model.accuracy import BUDGET, Revolution, compare, reference_revolution
 from gerotor_twin.model.pump import PumpModel
 from gerotor_twin.model.steady import run_steady
 
@@ -29,30 +29,35 @@ def test_default_numerics_within_budget_of_the_golden_reference(cfg, rpm, bar):
 
 
 @pytest.mark.parametrize("rpm,bar", LOW_POINTS)
-def test_default_numerics_rms_and_efficiency_within_budget_below_the_rated_pressure(cfg, rpm, bar):
-    """Golden: below the rated pressure the defaults (∂f/∂t in the stages, sub-step cap ``rate_fraction``
-    0.3) keep the RMS and η budget; before both, the RMS was 2.73 / 1.70 % at 5 / 15 bar, 3000 rpm.
-    The peak of the closing chamber's spike is not pinned here: it overshoots by up to ≈ 6 % between
-    5 and 15 bar (docs/numerics.md); the preset below meets the whole budget."""
+def test_default_numerics_within_budget_below_the_rated_pressure(cfg, rpm, bar):
+    """Golden: below the rated pressure the defaults (∂f/∂t in the stages with the closing ports' share
+    clipped, sub-step cap ``rate_fraction`` 0.3, ``closing_tolerance`` 0.25) keep the whole budget, the
+    peak of the closing chamber's spike included.  Before ∂f/∂t the RMS was 2.73 / 1.70 % at 5 / 15 bar,
+    3000 rpm; with ∂f/∂t alone the 15-bar peak was +4.1 % (docs/numerics.md)."""
     ref, meta = Revolution.load(path(rpm, bar))
     assert (meta["rpm"], meta["bar"], meta["model"]) == (rpm, bar, "mobility")
     res = run_steady(PumpModel(cfg, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
     err = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
-    for key in ("rms_pressure_error", "efficiency_error"):
-        assert abs(err[key]) <= BUDGET[key], (key, err[key])
-
-
-@pytest.mark.parametrize("rpm,bar", LOW_POINTS)
-def test_rate_capped_numerics_within_budget_below_the_rated_pressure(cfg, rpm, bar):
-    """Golden: the low-pressure preset (sub-step capped at 0.1 of Δp per step, loose tolerances) meets the
-    whole budget at 5 and 15 bar, the peak included (docs/numerics.md)."""
-    ref, meta = Revolution.load(path(rpm, bar))
-    assert (meta["rpm"], meta["bar"], meta["model"]) == (rpm, bar, "mobility")
-    c = replace(cfg, numerics=replace(cfg.numerics, **LOW_PRESSURE_NUMERICS))
-    res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
-    err = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
     for key, bound in BUDGET.items():
         assert abs(err[key]) <= bound, (key, err[key])
+
+
+def test_closing_tolerance_brings_the_spike_peak_within_budget(cfg):
+    """Behaviour against a fresh tight reference (:func:`reference_revolution`), mobility, 1000 rpm / 5 bar,
+    where the peak error is the solver's (the output grid misses 0.2 %): without the tighter tolerance on
+    chambers whose delivery port closes (``closing_tolerance`` 1) the spike's peak overshoots beyond the
+    2 % budget (+3.9 % measured); with the default 0.25 it is within (+1.8 %)."""
+    rpm, bar = 1000.0, 5.0
+    ref = reference_revolution(cfg, rpm, bar, "mobility")
+    pd = cfg.fluid.atmospheric_pa + bar * 1e5
+    peak = {}
+    for factor in (1.0, cfg.numerics.closing_tolerance):
+        c = replace(cfg, numerics=replace(cfg.numerics, closing_tolerance=factor))
+        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+        peak[factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)["peak_pressure_error"]
+    assert cfg.numerics.closing_tolerance == 0.25
+    assert peak[1.0] > BUDGET["peak_pressure_error"], peak
+    assert abs(peak[0.25]) <= BUDGET["peak_pressure_error"], peak
 
 
 def test_rate_fraction_default_and_wired_through(cfg):
@@ -126,3 +131,11 @@ def test_rate_fraction_out_of_range_is_refused_naming_the_field(value):
     from gerotor_twin.errors import InputError
     with pytest.raises(InputError, match=r"numerics\.rate_fraction"):
         Numerics(rate_fraction=value)
+
+
+@pytest.mark.parametrize("value", [0.0, 1.5, float("nan")])
+def test_closing_tolerance_out_of_range_is_refused_naming_the_field(value):
+    from gerotor_twin.config import Numerics
+    from gerotor_twin.errors import InputError
+    with pytest.raises(InputError, match=r"numerics\.closing_tolerance"):
+        Numerics(closing_tolerance=value)

@@ -37,18 +37,11 @@ from .steady import reference_config, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
 __all__ = ["accuracy", "compare", "Revolution", "reference_revolution", "print_accuracy", "within_budget",
-           "reference_numerics", "BUDGET", "LOW_PRESSURE_NUMERICS"]
+           "reference_numerics", "BUDGET"]
 
 #: The budget of the default numerics (issue 10): RMS ≤ 1 %, |η error| ≤ 0.3 % relative, peak ≤ 2 %.
 BUDGET = {"rms_pressure_error": 0.01, "efficiency_error": 0.003, "peak_pressure_error": 0.02}
 
-
-#: ``numerics:`` settings for waveform work below the rated pressure (measured 2026-12-01, ∂f/∂t in the
-#: stages, mobility and fixed, 78 points 1000–3000 rpm × 5–27.5 bar: 68 within the whole budget against 65
-#: for the defaults; the failures are the closing chamber's spike peak, RMS ≤ 1.30 %): the sub-step capped
-#: at 0.1 of Δp per step (``rate_fraction``) does the work the error estimate misses, so the tolerances can
-#: be loose.  Costs ≈ 400 sub-steps/rev at 3000 rpm / 27.5 bar (RTF ≈ 11.6 against ≈ 13.8) and 700 at 5 bar.
-LOW_PRESSURE_NUMERICS = {"rate_fraction": 0.1, "tolerance": 0.5, "log_density_tolerance": 1e-3}
 
 REFERENCE_TOLERANCE = 1e-8   #: sub-step tolerance of the reference, on ln(ρ/ρ₀) [-]
 REFERENCE_REFINEMENT = 8     #: reference output steps per default output step (2° → 0.25°)
@@ -179,7 +172,8 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
     ps = cfg.boundary.suction_pressure_pa
     row = {"rpm": rpm, "bar": bar, "model": model,
            "numerics": {k: getattr(cfg.numerics, k) for k in ("max_step_deg", "tolerance", "error_measure",
-                                                               "log_density_tolerance")}}
+                                                               "log_density_tolerance", "rate_fraction",
+                                                               "closing_tolerance")}}
     row.update(compare(Revolution.of(res), ref, ps, bar_gauge_to_pa_abs(bar, cfg.fluid.atmospheric_pa)))
     row["rtf"], row["substeps_per_revolution"] = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)
     return row

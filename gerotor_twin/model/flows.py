@@ -40,11 +40,18 @@ from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICT
                      FL_SUCTION_DELIVERY)
 
 __all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
-           "area_derivative", "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV"]
+           "area_derivative", "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV", "J_FT", "J_CS", "J_TCS", "J_CD", "J_CDN", "J_TCD",
+           "N_JAC_EXTRA", "closing_ports", "closing_share"]
 
 #: columns of Workspace.geo: V, dV/dθ, A_s, A_d, κ_rel, v_r/ω, and the slopes of the interpolated V, A_s, A_d
 #: and dV/dθ in θ (first stage only: the time derivative of the right-hand side)
 G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # Workspace.geo has 10 columns
+#: Columns of Workspace.jac after ∂f/∂y (N+1 columns), as offsets from N+1: ∂f/∂t without the closing ports,
+#: then per row j the closing ports' shares of it and the time until they close (:func:`closing_ports`,
+#: :func:`closing_share`): suction port → chamber row [1/s²], its time to close [s]; delivery port → chamber
+#: row, → delivery row, its time to close.
+J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(6)
+N_JAC_EXTRA = 6
 
 
 @njit(inline="always")
@@ -132,10 +139,10 @@ def area_derivative(q, dq, dp, area):
 @njit(inline="always")
 def transfer_rate(a, b, q, qt, ws, jac):
     """∂/∂θ of :func:`transfer` for a flow q from a to b whose θ-derivative at fixed pressures is qt [m³/(s·rad)],
-    into the last column of ``jac`` (densities held)."""
+    into the ∂f/∂t column of ``jac`` (densities held)."""
     u, d = (a, b) if q >= 0.0 else (b, a)
     st = qt if q >= 0.0 else -qt
-    t = jac.shape[1] - 1
+    t = ws.p.shape[0]                      # the ∂f/∂t column, right after ∂f/∂y
     jac[d, t] += ws.rho[u] / ws.rho[d] * st
     jac[u, t] -= st
 
@@ -258,6 +265,80 @@ def assemble(km, op, ws, f, jac, want_jac):
 
 
 @njit(inline="always")
+def _time_to_close(area, slope, omega, horizon):
+    """Time [s] until a port of open area [m²] falling at slope [m²/rad] closes, if within ``horizon`` [s];
+    else 0."""
+    if area > 0.0 and slope < 0.0 and area < -slope * omega * horizon:
+        return area / (-slope * omega)
+    return 0.0
+
+
+@njit
+def closing_ports(km, op, ws, jac, horizon):
+    """Move the shares of the ports that close within ``horizon`` [s] out of ∂f/∂t (``jac`` after
+    :func:`rhs` with the Jacobian) into their own columns, with their time to close (``J_*``), for
+    :func:`closing_share` (and the stepper's tighter tolerance on a chamber whose delivery port closes).
+    The time to close is the linear extrapolation A / (−ω dA/dθ); ``horizon`` must be at least the
+    longest sub-step (the stepper passes 4 output steps).
+
+    A port is closing where its open area falls (table slope < 0).  Its share is recomputed from the
+    first stage's pressures (still in ``ws``): ω·(∂Q/∂A)(dA/dθ)·(density ratio)/V for the chamber,
+    ω·(...) for the delivery volume (/ its volume behind a restriction), as :func:`assemble` scales it.
+    """
+    pc = km.pc
+    n = pc.n
+    n1 = n + 1
+    w = op.omega
+    p, rho, geo = ws.p, ws.rho, ws.geo
+    scale_n = w / pc.line_volume if pc.restriction else w
+    for j in range(n):
+        tc = _time_to_close(geo[j, G_AS], geo[j, G_DAS], w, horizon)
+        jac[j, n1 + J_TCS] = tc
+        if tc > 0.0:
+            inv = w / geo[j, G_V]
+            dp = op.p_s - p[j]
+            q, dq = port_orifice_flow(dp, geo[j, G_AS], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                      pc.laminar_delta, pc.density, pc.viscosity)
+            r = op.rho_s / rho[j] if q > 0.0 else 1.0
+            c = r * area_derivative(q, dq, dp, geo[j, G_AS]) * geo[j, G_DAS] * inv
+            jac[j, n1 + J_CS] = c
+            jac[j, n1 + J_FT] -= c
+        tc = _time_to_close(geo[j, G_AD], geo[j, G_DAD], w, horizon)
+        jac[j, n1 + J_TCD] = tc
+        if tc > 0.0:
+            inv = w / geo[j, G_V]
+            dp = p[n] - p[j]
+            q, dq = port_orifice_flow(dp, geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                      pc.laminar_delta, pc.density, pc.viscosity)
+            st = area_derivative(q, dq, dp, geo[j, G_AD]) * geo[j, G_DAD]
+            if q < 0.0:
+                st = -st
+            cj, cn = (rho[n] / rho[j] * st, -st) if q >= 0.0 else (-st, rho[j] / rho[n] * st)
+            jac[j, n1 + J_CD] = cj * inv
+            jac[j, n1 + J_CDN] = cn * scale_n
+            jac[j, n1 + J_FT] -= cj * inv
+            jac[n, n1 + J_FT] -= cn * scale_n
+
+
+@njit
+def closing_share(n, h, ws, out):
+    """∂f/∂t for a sub-step of h [s] into ``out``: ∂f/∂t without the closing ports (``ws.jac``) plus their
+    shares, each scaled by min(1, t_close/h), so that the linearised flow of a port stops at its closing
+    angle instead of running on through a negative area (:func:`closing_ports`)."""
+    n1 = n + 1
+    g = ws.jac
+    for i in range(n1):
+        out[i] = g[i, n1 + J_FT]
+    for j in range(n):
+        if g[j, n1 + J_TCS] > 0.0:
+            out[j] += g[j, n1 + J_CS] * min(1.0, g[j, n1 + J_TCS] / h)
+        if g[j, n1 + J_TCD] > 0.0:
+            c = min(1.0, g[j, n1 + J_TCD] / h)
+            out[j] += g[j, n1 + J_CD] * c
+            out[n] += g[j, n1 + J_CDN] * c
+
+
+@njit(inline="always")
 def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     """dy/dt [1/s] into ``f`` (and ∂f/∂(y, t) into ``jac`` if ``want_jac``); flows into ``ws.flows``.
 
@@ -278,7 +359,7 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
         ws.flows[i] = 0.0
     if want_jac:
         for i in range(n + 1):
-            for k in range(n + 2):
+            for k in range(n + 2):      # the closing ports' columns are written by closing_ports
                 jac[i, k] = 0.0
     port_flows(km, op, ws, jac, want_jac)
     tip_flows(gaps, km, op, ws, jac, want_jac)

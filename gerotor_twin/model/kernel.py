@@ -15,8 +15,14 @@ side depends on time through the shaft angle, so the stages carry ∂f/∂t [3]:
 
 Without f_t a stiff chamber on a moving quasi-equilibrium (an opening or
 closing port) lags it by ≈ 0.71 of its movement per sub-step (docs/numerics.md).
-The sub-step is also capped so that no chamber pressure moves by more than
-``numerics.rate_fraction`` × (p_delivery − p_suction) in it.  The error of a
+A port that closes during the sub-step would, linearised, keep closing through
+zero area: its share of f_t is scaled by min(1, t_c/h), t_c its time to close
+(:func:`.flows.closing_ports`).  The sub-step is also capped so that no chamber
+pressure moves by more than ``numerics.rate_fraction`` × (p_delivery − p_suction)
+in it, and a chamber whose delivery port closes within four output steps has its
+error tolerance multiplied by ``numerics.closing_tolerance``: the pressure spike of
+the throttled, compressed chamber forms there, and the embedded error estimate
+under-reads it (docs/numerics.md).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
@@ -48,7 +54,7 @@ from .._jit import njit
 from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
-from .flows import rhs
+from .flows import J_TCD, closing_ports, closing_share, rhs
 from .loads import outer_gear_load
 from .params import ERROR_PRESSURE, FL_DELIVERY
 from .volumes import move_volumes
@@ -71,6 +77,8 @@ MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP = range(4)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
+#: output steps ahead in which a closing port is treated as closing (its ∂f/∂t share, its tolerance)
+CLOSING_HORIZON = 4.0
 
 
 # ------------------------------------------------------------ linear algebra
@@ -127,13 +135,16 @@ def _error_weights(km, op, ws):
         if i == pc.n and not pc.restriction:
             ws.wt[i] = 0.0                                          # the delivered-volume quadrature
         elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
-            ws.wt[i] = max(ws.beta[i] / (pc.tolerance * op.dp_ref), 1.0 / pc.log_density_tolerance)
+            tol = pc.tolerance
+            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] > 0.0:     # delivery port closing: the spike
+                tol *= pc.closing_tolerance
+            ws.wt[i] = max(ws.beta[i] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
 
 
 @njit
-def _first_stage(y, th, km, op, ws, integrals):
+def _first_stage(y, th, km, op, ws, integrals, big_h):
     """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
 
     The flows here are those at the end of the last accepted sub-step: its trapezoid
@@ -141,6 +152,7 @@ def _first_stage(y, th, km, op, ws, integrals):
     so ∫ flow dt uses the flows of the accepted states, at no extra RHS.
     """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
+    closing_ports(km, op, ws, ws.jac, CLOSING_HORIZON * big_h)
     _error_weights(km, op, ws)
     cap = math.inf
     if op.rate_dp > 0.0:    # numerics.rate_fraction: sub-step cap from the fastest chamber pressure, read in pressure_step
@@ -174,14 +186,15 @@ def ros2_step(y, th, h, km, op, ws):
         ws.lu[i, i] += 1.0
     lu_factor(ws.lu, ws.piv)
     gh = GAMMA * h
+    closing_share(km.pc.n, h, ws, ws.err)                  # ∂f/∂t for this h (ws.err is free until the end)
     for i in range(n1):
-        ws.k1[i] = ws.f0[i] + gh * ws.jac[i, n1]           # non-autonomous ROS2: + γh ∂f/∂t
+        ws.k1[i] = ws.f0[i] + gh * ws.err[i]               # non-autonomous ROS2: + γh ∂f/∂t
     lu_solve(ws.lu, ws.piv, ws.k1, ws.k1)
     for i in range(n1):
         ws.y1[i] = y[i] + h * ws.k1[i]
     rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, False)
     for i in range(n1):
-        ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.jac[i, n1]
+        ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
     en = 0.0
     for i in range(n1):
@@ -215,7 +228,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         h = min(h, big_h - done)
         th = theta + op.omega * done
         if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ): also the rate cap
-            _first_stage(y, th, km, op, ws, integrals)
+            _first_stage(y, th, km, op, ws, integrals, big_h)
         h = min(max(min(h, ws.ctrl[CT_HCAP]), h_min), big_h - done)
         w = (done + h) / big_h
         for k in range(pc.n):
@@ -322,7 +335,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     ws.ctrl[CT_PENDING] = 0.0
-    _first_stage(y, theta, km, op, ws, integrals)
+    _first_stage(y, theta, km, op, ws, integrals, h)
     for n in range(n_steps):
         if not pc.restriction:
             y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
@@ -345,7 +358,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
         move_volumes(km.tab, ws.disp, ex, ey, h)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
-        _first_stage(y, theta, km, op, ws, integrals)   # end-of-step flows (recorded) = next first stage
+        _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
     e[0] = ex

@@ -87,6 +87,7 @@ class PumpConstants(NamedTuple):
     tip_flow_factor: float = 1.0  #: multiplies the tooth-tip flow, Eq. (22) (0: tips sealed; what-if runs) [-]
     orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
     laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
+    closing_tolerance: float = 1.0  #: factor on ``tolerance`` where a delivery port is closing (numerics) [-]
 
 
 class KernelModel(NamedTuple):
@@ -124,7 +125,7 @@ class Workspace(NamedTuple):
     ynew: np.ndarray
     err: np.ndarray
     wt: np.ndarray          #: (N+1,) error weights [1/-]
-    jac: np.ndarray         #: (N+1, N+2) ∂f/∂y [1/s] and, in the last column, ∂f/∂t [1/s²]
+    jac: np.ndarray         #: (N+1, N+7) ∂f/∂y [1/s], then ∂f/∂t [1/s²] and the closing ports' shares (flows.J_*)
     lu: np.ndarray          #: (N+1, N+1) LU of I − γ h J
     piv: np.ndarray         #: (N+1,) pivots
     gaps0: np.ndarray       #: (N,) tooth-tip gaps at the sub-step start [m]
@@ -175,7 +176,7 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction=config.boundary.mode == "restriction", line_volume=config.boundary.delivery_volume_m3,
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
-        log_density_tolerance=n.log_density_tolerance,
+        log_density_tolerance=n.log_density_tolerance, closing_tolerance=n.closing_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta)
     return KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
 
@@ -212,7 +213,7 @@ def workspace(n: int) -> Workspace:
         return np.zeros(k)
 
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
-                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + 1)), lu=np.zeros((n1, n1)),
+                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + 6)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(4),
                      disp=v(4))

@@ -15,8 +15,8 @@ from gerotor_twin.config import load_config
 from gerotor_twin.model.accuracy import REFERENCE_REFINEMENT, REFERENCE_TOLERANCE, reference_revolution
 
 POINTS = ((1000.0, 27.5), (2000.0, 27.5), (3000.0, 27.5))     # rpm, bar gauge
-#: Below the rated pressure: where the defaults miss the budget and the rate-capped preset
-#: (gerotor_twin.model.accuracy.LOW_PRESSURE_NUMERICS) must meet it.
+#: Below the rated pressure: where the defaults missed the budget before ∂f/∂t and the closing-port
+#: measures (docs/numerics.md) and must now meet it.
 LOW_POINTS = ((3000.0, 5.0), (3000.0, 15.0))
 HERE = Path(__file__).resolve().parent
 
