@@ -30,7 +30,7 @@ def warm(cfg):
 
 
 def _rhs(m, op, y, theta, gaps, km=None):
-    """(f, ∂f/∂y, ∂f/∂t) of the kernel's right-hand side (∂f/∂t: ``jac``'s last column and the closing ports'
+    """(f, ∂f/∂y, ∂f/∂t) of the kernel's right-hand side (∂f/∂t: ``jac``'s column N+1 and the closing ports'
     shares, in full as for a sub-step shorter than their time to close)."""
     ws = m._ws
     f = np.empty(m.N + 1)
@@ -106,7 +106,7 @@ def test_area_derivative_of_the_orifice_laws_matches_central_differences(law):
 
 
 def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
-    """Behaviour: ∂f/∂t (the last column of ``jac``, non-autonomous ROS2) against ω·(f(θ+δ) − f(θ−δ))/2δ at
+    """Behaviour: ∂f/∂t (column N+1 of ``jac`` and the closing ports' shares, non-autonomous ROS2) against ω·(f(θ+δ) − f(θ−δ))/2δ at
     fixed state and gaps, at several angles among them port edges, each chamber inside one table cell.
 
     Exact there when what ∂f/∂t leaves out is switched off: the θ-dependence of the tooth-tip flows
