@@ -36,10 +36,10 @@ def _rhs(m, op, y, theta, gaps, km=None):
     f = np.empty(m.N + 1)
     jac = np.empty((m.N + 1, m.N + 1 + F.N_JAC_EXTRA))
     F.rhs(y, theta, gaps, m.kernel if km is None else km, op, ws, f, jac, True)
-    F.closing_ports(m.kernel if km is None else km, op, ws, jac, 1.0)      # every closing port
+    F.closing_ports((m.kernel if km is None else km).pc, op, ws.p, ws.rho, ws.geo, jac, 1.0)      # every closing port
     ws.jac[:] = jac
     f_t = np.empty(m.N + 1)
-    F.closing_share(m.N, 1e-30, ws, f_t)
+    F.closing_share(m.N, 1e-30, ws.jac, f_t)
     return f, jac[:, :m.N + 1].copy(), f_t
 
 
@@ -163,8 +163,8 @@ def test_closing_port_share_stops_at_the_closing_angle(warm):
     assert tc == pytest.approx(tab.column("AD", theta, j) / (-ws.geo[j, F.G_DAD] * inp.omega), rel=1e-9)
     base = g[:, c + F.J_FT].copy()
     short, long = np.empty(n + 1), np.empty(n + 1)
-    F.closing_share(n, 0.5 * tc, ws, short)
-    F.closing_share(n, 4.0 * tc, ws, long)
+    F.closing_share(n, 0.5 * tc, ws.jac, short)
+    F.closing_share(n, 4.0 * tc, ws.jac, long)
     assert short[j] - base[j] == pytest.approx(g[j, c + F.J_CD], rel=1e-12)
     assert long[j] - base[j] == pytest.approx(0.25 * g[j, c + F.J_CD], rel=1e-12)
     tcd = g[:n, c + F.J_TCD]

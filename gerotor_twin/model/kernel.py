@@ -74,7 +74,7 @@ N_COUNTERS = 8
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP = range(4)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING = range(5)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 #: output steps ahead in which a closing port is treated as closing (its ∂f/∂t share, its tolerance)
@@ -152,7 +152,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     so ∫ flow dt uses the flows of the accepted states, at no extra RHS.
     """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
-    closing_ports(km, op, ws, ws.jac, CLOSING_HORIZON * big_h)
+    ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     _error_weights(km, op, ws)
     cap = math.inf
     if op.rate_dp > 0.0:    # numerics.rate_fraction: sub-step cap from the fastest chamber pressure, read in pressure_step
@@ -186,7 +186,11 @@ def ros2_step(y, th, h, km, op, ws):
         ws.lu[i, i] += 1.0
     lu_factor(ws.lu, ws.piv)
     gh = GAMMA * h
-    closing_share(km.pc.n, h, ws, ws.err)                  # ∂f/∂t for this h (ws.err is free until the end)
+    if ws.ctrl[CT_CLOSING] > 0.0:                          # ∂f/∂t for this h (ws.err is free until the end)
+        closing_share(km.pc.n, h, ws.jac, ws.err)
+    else:
+        for i in range(n1):
+            ws.err[i] = ws.jac[i, n1]
     for i in range(n1):
         ws.k1[i] = ws.f0[i] + gh * ws.err[i]               # non-autonomous ROS2: + γh ∂f/∂t
     lu_solve(ws.lu, ws.piv, ws.k1, ws.k1)

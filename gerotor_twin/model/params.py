@@ -136,9 +136,10 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (4,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+    ctrl: np.ndarray        #: (5,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
-                            #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s]
+                            #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s];
+                            #: how many ports close within the horizon there (flows.closing_ports)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
 
@@ -215,5 +216,5 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + 6)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(4),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
                      disp=v(4))
