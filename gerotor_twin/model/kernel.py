@@ -175,9 +175,9 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
 def ros2_step(y, th, h, km, op, ws):
     """One ROS2 sub-step of size h [s] from (y, θ): ``ws.ynew`` and the embedded error ``ws.err``.
 
-    ``ws.f0``/``ws.jac`` must hold the RHS, ∂f/∂y and (column N+1 on, :func:`.flows.closing_ports`) ∂f/∂t at (y, θ, ``ws.gaps0``) (:func:`pressure_step`
-    evaluates the first stage before it sizes the sub-step); the second stage is at θ + ωh
-    with ``ws.gaps1``.
+    ``ws.f0``/``ws.jac`` must hold the RHS, ∂f/∂y and (from column N+1 on, :func:`.flows.closing_ports`)
+    ∂f/∂t at (y, θ, ``ws.gaps0``) (:func:`pressure_step` evaluates the first stage before it sizes the
+    sub-step); the second stage is at θ + ωh with ``ws.gaps1``.
     """
     n1 = y.shape[0]
     for i in range(n1):
