@@ -37,7 +37,7 @@ from ..hydraulics.state_equation import exp_small, state_of
 from .contact import column, locate
 from .volumes import displace_chamber, volumes_moved
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
-                     FL_SUCTION_DELIVERY)
+                     FL_SUCTION_DELIVERY, N_JAC_EXTRA)
 
 __all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
            "area_derivative", "closing_ports", "closing_share",
@@ -51,8 +51,7 @@ G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # W
 #: then per row j the closing ports' shares of it and the time until they close (:func:`closing_ports`,
 #: :func:`closing_share`): suction port → chamber row [1/s²], its time to close [s]; delivery port → chamber
 #: row, → delivery row, its time to close.
-J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(6)
-N_JAC_EXTRA = 6
+J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(N_JAC_EXTRA)
 
 
 @njit(inline="always")
@@ -332,16 +331,15 @@ def closing_share(n, h, jac, out):
     shares, each scaled by min(1, t_close/h), so that the linearised flow of a port stops at its closing
     angle instead of running on through a negative area (:func:`closing_ports`)."""
     n1 = n + 1
-    g = jac
     for i in range(n1):
-        out[i] = g[i, n1 + J_FT]
+        out[i] = jac[i, n1 + J_FT]
     for j in range(n):
-        if g[j, n1 + J_TCS] > 0.0:
-            out[j] += g[j, n1 + J_CS] * min(1.0, g[j, n1 + J_TCS] / h)
-        if g[j, n1 + J_TCD] > 0.0:
-            c = min(1.0, g[j, n1 + J_TCD] / h)
-            out[j] += g[j, n1 + J_CD] * c
-            out[n] += g[j, n1 + J_CDN] * c
+        if jac[j, n1 + J_TCS] > 0.0:
+            out[j] += jac[j, n1 + J_CS] * min(1.0, jac[j, n1 + J_TCS] / h)
+        if jac[j, n1 + J_TCD] > 0.0:
+            c = min(1.0, jac[j, n1 + J_TCD] / h)
+            out[j] += jac[j, n1 + J_CD] * c
+            out[n] += jac[j, n1 + J_CDN] * c
 
 
 @njit(inline="always")

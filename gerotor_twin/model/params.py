@@ -47,6 +47,10 @@ N_FLOWS = 7
 ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 
 
+#: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
+N_JAC_EXTRA = 6
+
+
 class KernelTables(NamedTuple):
     """Geometry of chamber 0 / lobe 0 sampled over one chamber period (see geometry.tables)."""
     rows: np.ndarray    #: (M, len(COLUMNS)): one row per angle sample, columns as ``COLUMNS`` [SI]
@@ -214,7 +218,7 @@ def workspace(n: int) -> Workspace:
         return np.zeros(k)
 
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
-                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + 6)), lu=np.zeros((n1, n1)),
+                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
                      disp=v(4))
