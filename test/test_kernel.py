@@ -294,7 +294,8 @@ for name in ("fixed", "mobility"):
     inp = Inputs(3000 * math.pi / 30, 101325.0, 101325.0 + 27.5e5)
     s, o = m.advance(m.initial_state(inp), 12 * m.step_size(inp.omega), inp)
     out[name] = {"p": o.chamber_pressures.tolist(), "e": o.eccentricity.tolist(), "q": o.delivery_flow.tolist(),
-                 "y": s.log_density.tolist(), "eta": o.volumetric_efficiency}
+                 "y": s.log_density.tolist(), "eta": o.volumetric_efficiency,
+                 "peak": o.chamber_peak_pressures.tolist()}
 json.dump(out, sys.stdout)
 """
 
@@ -314,7 +315,7 @@ def test_pure_python_path_equals_the_compiled_one():
         runs[flag] = json.loads(r.stdout)
     for name in ("fixed", "mobility"):
         a, b = runs["0"][name], runs["1"][name]
-        for key in ("p", "q", "y", "e"):
+        for key in ("p", "q", "y", "e", "peak"):
             x, y = np.asarray(a[key]), np.asarray(b[key])
             assert np.allclose(x, y, rtol=1e-9, atol=1e-9 * np.abs(x).max() + 1e-300), (name, key)
         assert a["eta"] == pytest.approx(b["eta"], rel=1e-9)
@@ -335,3 +336,44 @@ def test_a_changed_source_invalidates_the_numba_cache(tmp_path, monkeypatch):
     cached.write_text("x")
     assert not _jit.invalidate_stale_cache()                # same sources: kept
     assert cached.exists()
+
+
+
+def _ros2_peak(y0, h, f, jac, f_t, start=None):
+    """kernel._track_peak after one ROS2 step of a scalar ODE y' = f(t, y) with ∂f/∂y = jac, ∂f/∂t = f_t
+    constant (linear); the stages are those of kernel.ros2_step, written out for one variable.
+    Returns (the running peak, the step's end)."""
+    from gerotor_twin.model.params import workspace
+    g = K.GAMMA
+    k1 = (f(0.0, y0) + g * h * f_t) / (1.0 - g * h * jac)
+    k2 = (f(h, y0 + h * k1) - 2.0 * k1 - g * h * f_t) / (1.0 - g * h * jac)
+    ws = workspace(1)
+    ws.k1[0], ws.k2[0] = k1, k2
+    y1 = y0 + 1.5 * h * k1 + 0.5 * h * k2
+    ws.peak[0] = y0 if start is None else start
+    K._track_peak(np.array([y1, 0.0]), h, 1, ws)
+    return ws.peak[0], y1
+
+
+@pytest.mark.parametrize("t_star", [0.1e-3, 1.0e-3, 1.9e-3])
+def test_track_peak_finds_the_maximum_of_a_parabola_exactly(t_star):
+    """Closed form: ROS2 and its continuous extension are exact for y' = c (t* − t) (y a parabola), so the
+    tracked peak over a sub-step of h = 2 ms that contains t* is y₀ + c t*²/2, not the larger end."""
+    c, y0, h = 3.0e3, 0.25, 2e-3
+    peak, y1 = _ros2_peak(y0, h, lambda t, y: c * (t_star - t), 0.0, -c)
+    assert y1 == pytest.approx(y0 + c * (t_star * h - h * h / 2), rel=1e-13)        # the step itself: exact
+    assert peak == pytest.approx(y0 + c * t_star ** 2 / 2, rel=1e-13)
+    assert peak > max(y0, y1)
+
+
+def test_track_peak_does_not_overshoot_a_stiff_approach():
+    """Closed form: a stiff chamber relaxing up to its equilibrium, y' = λ(y − y_eq), λh = −10⁶, has no
+    maximum inside the step; the tracked peak is the end (≤ y_eq), where a Hermite cubic through the end
+    rates would overshoot.  A falling step and an earlier, higher peak leave the running peak as it is."""
+    lam, y_eq, h = -1e9, 1.0, 1e-3
+    peak, y1 = _ros2_peak(0.0, h, lambda t, y: lam * (y - y_eq), lam, 0.0)
+    assert peak == y1 and 0.99 < peak <= y_eq + 1e-12
+    peak, _ = _ros2_peak(2.0, h, lambda t, y: lam * (y - y_eq), lam, 0.0)
+    assert peak == 2.0                                                       # falling: the start stays
+    peak, _ = _ros2_peak(0.0, 2e-3, lambda t, y: 3e3 * (1e-3 - t), 0.0, -3e3, start=9.0)
+    assert peak == 9.0

@@ -43,6 +43,7 @@ References
    SIAM J. Sci. Comput. 20 (1999) 1456–1480.
 .. [3] E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*,
    2nd ed., Springer 1996, sec. IV.7 (Rosenbrock methods, non-autonomous form).
+.. [4] Ibid., sec. IV.7, "Dense output" (continuous extensions of Rosenbrock methods).
 """
 from __future__ import annotations
 
@@ -77,6 +78,7 @@ MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING = range(5)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
+_DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
 #: output steps ahead in which a closing port is treated as closing (its ∂f/∂t share, its tolerance)
 CLOSING_HORIZON = 4.0
 
@@ -143,13 +145,43 @@ def _error_weights(km, op, ws):
             ws.wt[i] = 1.0 / pc.tolerance
 
 
+@njit(inline="always")
+def _track_peak(y, h, n, ws):
+    r"""Raise ``ws.peak`` to the max of each chamber's ln ρ over the accepted sub-step of h [s] that ended at y.
+
+    ROS2's continuous extension [4] (second order, like the step, and L-stable: it stays between the
+    ends for a stiff chamber, where a Hermite cubic through the end rates overshoots) is a parabola
+    in the stages ``ws.k1``, ``ws.k2`` of the sub-step:
+
+    .. math::
+        y(t_n + sh) = y_n + h\left[b_1(s) k_1 + b_2(s) k_2\right],\qquad
+        b_2(s) = \frac{s^2/2 - \gamma s}{1 - 2\gamma},\quad b_1(s) = s + b_2(s)
+
+    (:math:`b_1(1) = 3/2`, :math:`b_2(1) = 1/2`: the step itself); its maximum inside the sub-step,
+    if any, and the end y are the candidates.  The sub-steps resolve a pressure spike that the
+    output grid samples only at its angles.
+    """
+    for i in range(n):
+        if y[i] > ws.peak[i]:
+            ws.peak[i] = y[i]
+        if ws.k1[i] + ws.k2[i] > 0.0:                          # concave: w < 0
+            u = h * ws.k1[i]
+            w = h * (ws.k1[i] + ws.k2[i]) * _DENSE_W            # y(sh) = y_n + s(u − γw) + s²w/2
+            s = GAMMA - u / w
+            if 0.0 < s < 1.0:
+                m = y[i] - 1.5 * u - 0.5 * h * ws.k2[i] + s * (u - GAMMA * w) + 0.5 * s * s * w
+                if m > ws.peak[i]:
+                    ws.peak[i] = m
+
+
 @njit
 def _first_stage(y, th, km, op, ws, integrals, big_h):
     """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
 
     The flows here are those at the end of the last accepted sub-step: its trapezoid
     (``ws.flows_prev`` at its start, these at its end) is added to ``integrals`` now,
-    so ∫ flow dt uses the flows of the accepted states, at no extra RHS.
+    so ∫ flow dt uses the flows of the accepted states, at no extra RHS; and its
+    chamber peaks are tracked (:func:`_track_peak`).
     """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
@@ -163,6 +195,8 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
             cap = op.rate_dp / r
     ws.ctrl[CT_HCAP] = cap
     h = ws.ctrl[CT_PENDING]
+    if h > 0.0:
+        _track_peak(y, h, km.pc.n, ws)
     for i in range(ws.flows.shape[0]):
         if h > 0.0 and not (i == FL_DELIVERY and not km.pc.restriction):
             integrals[i] += 0.5 * h * (ws.flows_prev[i] + ws.flows[i])
@@ -273,6 +307,18 @@ def to_pressures(y, km, out):
     return cav
 
 
+@njit
+def peak_pressures(rec_peak, rec_p, p0, km):
+    """The ln ρ peaks of :func:`integrate` as pressures [Pa], in place: each row's highest chamber pressure
+    over its closed step, at least those at its two ends (``p0``: the chambers' at the first step's start)."""
+    for n in range(rec_peak.shape[0]):
+        for i in range(rec_peak.shape[1]):
+            s = rec_peak[n, i]
+            start = p0[i] if n == 0 else rec_p[n - 1, i]
+            ends = max(start, rec_p[n, i])
+            rec_peak[n, i] = max(pressure_of(s, km.eos), ends) if s > -math.inf else ends
+
+
 @njit(inline="always")
 def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
     """One Heun step of the outer-gear centre over h [s] under the load of the pressures ``ws.pres``.
@@ -303,7 +349,7 @@ def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
 
 
 @njit(inline="always")
-def _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws):
+def _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws):
     fl = ws.flows
     rec[n, R_T] = t
     rec[n, R_THETA] = theta
@@ -319,15 +365,18 @@ def _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws):
     rec[n, R_MIN_GAP] = np.min(ws.gaps0)
     for i in range(rec_p.shape[1]):
         rec_p[n, i] = ws.pres[i]
+        rec_peak[n, i] = ws.peak[i]
+        ws.peak[i] = -math.inf
         rec_gap[n, i] = ws.gaps0[i]
 
 
 @njit
-def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, counters, integrals, move):
+def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters, integrals, move):
     """Advance ``n_steps`` output steps of h [s]; returns the new (θ, t), updates y, e in place.
 
     Writes one record per step into ``rec`` (N_REC columns), ``rec_p`` (chamber
-    pressures) and ``rec_gap`` (gap heights); ``integrals`` accumulates
+    pressures), ``rec_peak`` (each chamber's highest pressure over the step, from
+    the sub-steps: :func:`_track_peak`) and ``rec_gap`` (gap heights); ``integrals`` accumulates
     ∫ flow dt [m³] per ``FL_*`` index: the delivered volume (imposed delivery pressure)
     with the Rosenbrock stages themselves, consistent with the chambers' mass balance;
     the others by the trapezoid over every accepted ROS2 sub-step.
@@ -340,6 +389,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
+    ws.peak[:] = -math.inf
     for n in range(n_steps):
         if not pc.restriction:
             y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
@@ -364,13 +414,14 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, count
             counters[C_GEAR_CONTACT] += 1
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
-        _record(rec, rec_p, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
+        _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
     e[0] = ex
     e[1] = ey
     return theta, t
 
 
-def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_gap, counters, integrals):
+def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters,
+                       integrals):
     """Output steps with a bearing model other than the mobility method (Method 1, FDM): a Python loop.
 
     Each output step is one compiled :func:`integrate` step with the gear held,
@@ -378,8 +429,8 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
     (compiled for it in each process: numba caches no function that takes a function).
     """
     for i in range(n_steps):
-        theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_gap[i:i + 1],
-                             counters, integrals, MOVE_EXTERNAL)
+        theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
+                             rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
         kc = int(rec[i, R_KC])
         ex, ey, fx, fy = heun_step(bearing.kernel, bearing.params, e[0], e[1], h, theta, op.omega, kc, km, ws,
                                    counters)

@@ -146,6 +146,7 @@ class Workspace(NamedTuple):
                             #: how many ports close within the horizon there (flows.closing_ports)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
+    peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
 
 
 def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float) -> tuple[float, float, float]:
@@ -221,4 +222,4 @@ def workspace(n: int) -> Workspace:
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
-                     disp=v(4))
+                     disp=v(4), peak=np.full(n, -np.inf))

@@ -193,6 +193,7 @@ class PumpModel:
         vols = state.volumes.copy()
         rec = np.zeros((n, K.N_REC))
         rec_p = np.zeros((n, self.N))
+        rec_peak = np.zeros((n, self.N))
         rec_g = np.zeros((n, self.N))
         op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery,
                        self.config.numerics.rate_fraction)
@@ -204,10 +205,11 @@ class PumpModel:
         if n:
             if self._move == K.MOVE_EXTERNAL:
                 theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p,
-                                                rec_g, counters, vols)
+                                                rec_peak, rec_g, counters, vols)
             else:
-                theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_g, counters, vols,
-                                       self._move)
+                theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
+                                       counters, vols, self._move)
+            K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel)
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
             raise FloatingPointError("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
@@ -216,7 +218,7 @@ class PumpModel:
         new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
                         volumes=vols, swept_angle=swept,
                         substep=float(ws.ctrl[K.CT_SUBSTEP]))
-        return new, self._outputs(rec, rec_p, rec_g, inputs, vols - state.volumes, dt)
+        return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
     def gaps(self, theta: float, e) -> tuple[np.ndarray, float, int]:
         """Tooth-tip gaps [m] at shaft angle θ [rad] for an outer-gear displacement e [m] (sec. 3.7 rule).
@@ -228,11 +230,11 @@ class PumpModel:
                                     float(e[0]), float(e[1]), h, np.empty((self.N, 9)))
         return h, gam, kc
 
-    def _outputs(self, rec, rec_p, rec_g, inputs: Inputs, dvol, dt) -> Outputs:
+    def _outputs(self, rec, rec_p, rec_peak, rec_g, inputs: Inputs, dvol, dt) -> Outputs:
         qth = self.theoretical_flow(inputs.omega)
         eta = float(dvol[FL_DELIVERY] / (qth * dt)) if qth > 0 and dt > 0 else float("nan")
         return Outputs(
-            t=rec[:, K.R_T], theta=rec[:, K.R_THETA], chamber_pressures=rec_p,
+            t=rec[:, K.R_T], theta=rec[:, K.R_THETA], chamber_pressures=rec_p, chamber_peak_pressures=rec_peak,
             delivery_pressure=rec[:, K.R_PD], delivery_flow=rec[:, K.R_QDEL], suction_flow=rec[:, K.R_QSUC],
             leak_suction_delivery=rec[:, K.R_QSD], leak_drain=rec[:, K.R_QDR],
             restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, [K.R_EX, K.R_EY]],

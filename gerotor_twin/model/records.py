@@ -74,6 +74,7 @@ class Outputs:
     t: np.ndarray                   #: time [s]
     theta: np.ndarray               #: shaft angle [rad]
     chamber_pressures: np.ndarray   #: (n, N) [Pa]
+    chamber_peak_pressures: np.ndarray  #: (n, N) each chamber's highest pressure over the step ending at row i [Pa]
     delivery_pressure: np.ndarray   #: [Pa]
     delivery_flow: np.ndarray       #: net flow out of the delivery port [m³/s]
     suction_flow: np.ndarray        #: flow in through the suction port [m³/s]

@@ -45,7 +45,7 @@ class SteadyResult:
             "volumetric_efficiency": self.volumetric_efficiency,
             "delivery_flow_ripple": self.flow_ripple,
             "min_chamber_pressure_pa": float(o.chamber_pressures.min()),
-            "max_chamber_pressure_pa": float(o.chamber_pressures.max()),
+            "max_chamber_pressure_pa": float(o.chamber_peak_pressures.max()),   # between output angles too
             "mean_eccentricity_m": [float(e[:, 0].mean()), float(e[:, 1].mean())],
             "min_tooth_gap_m": float(o.gaps.min()),
             "mean_delivery_pressure_pa": float(o.delivery_pressure.mean()),
