@@ -377,3 +377,21 @@ def test_track_peak_does_not_overshoot_a_stiff_approach():
     assert peak == 2.0                                                       # falling: the start stays
     peak, _ = _ros2_peak(0.0, 2e-3, lambda t, y: 3e3 * (1e-3 - t), 0.0, -3e3, start=9.0)
     assert peak == 9.0
+
+
+@pytest.mark.parametrize("name", ["fixed", "mobility"])
+def test_state_pressures_are_those_of_the_state(cfg, name):
+    """Behaviour: ``PumpState.pressures`` (taken from the stepper's last output step, not recomputed) is
+    p(ln ρ) of the state, element for element, after an advance and after an empty one; the peak output
+    of every step is at least the pressures at both of its ends."""
+    m = PumpModel(cfg, name)
+    inp = Inputs(2500 * math.pi / 30, 101325.0, 101325.0 + 12e5)
+    st0 = m.initial_state(inp)
+    st, o = m.advance(st0, 0.004, inp)
+    for s in (st, m.advance(st, 0.0, inp)[0]):
+        p = np.empty_like(s.log_density)
+        K.to_pressures(s.log_density, m.kernel, p)
+        assert np.array_equal(p, s.pressures)
+    assert np.all(o.chamber_peak_pressures >= o.chamber_pressures)
+    assert np.all(o.chamber_peak_pressures[0] >= st0.pressures[:m.N])
+    assert np.all(o.chamber_peak_pressures[1:] >= o.chamber_pressures[:-1])

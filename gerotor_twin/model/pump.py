@@ -209,12 +209,15 @@ class PumpModel:
             else:
                 theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
                                        counters, vols, self._move)
-            K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel)
+            K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel.eos)
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
             raise FloatingPointError("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
-        pres = np.empty_like(y)
-        K.to_pressures(y, self.kernel, pres)
+        if n:
+            pres = ws.pres.copy()                  # integrate() leaves the pressures of its last state there
+        else:
+            pres = np.empty_like(y)
+            K.to_pressures(y, self.kernel, pres)
         new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
                         volumes=vols, swept_angle=swept,
                         substep=float(ws.ctrl[K.CT_SUBSTEP]))
