@@ -167,15 +167,17 @@ def test_closing_port_share_stops_at_the_closing_angle(warm):
     F.closing_share(n, 4.0 * tc, ws.jac, long)
     assert short[j] - base[j] == pytest.approx(g[j, c + F.J_CD], rel=1e-12)
     assert long[j] - base[j] == pytest.approx(0.25 * g[j, c + F.J_CD], rel=1e-12)
-    tcd = g[:n, c + F.J_TCD]
-    assert long[n] - base[n] == pytest.approx(np.sum(g[:n, c + F.J_CDN] * np.minimum(1.0, tcd / (4 * tc))),
+    tcd = g[:n, c + F.J_TCD]                   # < 0: just opened, no share moved (tolerance only)
+    share = np.where(tcd > 0, np.minimum(1.0, tcd / (4 * tc)), 0.0)
+    assert long[n] - base[n] == pytest.approx(np.sum(np.where(tcd > 0, g[:n, c + F.J_CDN], 0.0) * share),
                                               rel=1e-12)
 
 
 def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ);
-    for a chamber whose delivery port is closing (flagged by ``closing_ports``) tol is multiplied by
-    ``numerics.closing_tolerance`` (0.25 in the packaged config), elsewhere not."""
+    for a chamber whose delivery port is closing or has just opened (flagged by ``closing_ports``: time to
+    close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.25
+    in the packaged config), elsewhere not."""
     m, inp, s = warm
     km = m.kernel
     pc = km.pc
@@ -188,12 +190,19 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
         _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])     # closing_ports: ws.jac
         K._error_weights(km, op, ws)
         for j in range(n):
-            closing = bool(ws.jac[j, c + F.J_TCD] > 0)
+            tcd = ws.jac[j, c + F.J_TCD]
+            closing = bool(tcd != 0)
+            a, slope = ws.geo[j, F.G_AD], ws.geo[j, F.G_DAD]
+            if tcd < 0:                                      # opened within the window (1 s / 4 here)
+                assert a > 0 and slope > 0 and -tcd == pytest.approx(a / (slope * op.omega), rel=1e-12)
+                seen["opened"] = seen.get("opened", 0) + 1
+            elif tcd > 0:
+                assert a > 0 and slope < 0 and tcd == pytest.approx(a / (-slope * op.omega), rel=1e-12)
             tol = pc.tolerance * (pc.closing_tolerance if closing else 1.0)
             want = max(ws.beta[j] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
             assert ws.wt[j] == pytest.approx(want, rel=1e-12), (theta, j, closing)
             seen[closing] += ws.beta[j] / (tol * op.dp_ref) > 1.0 / pc.log_density_tolerance
-    assert seen[True] and seen[False], seen
+    assert seen[True] and seen[False] and seen["opened"], seen
 
 
 @pytest.fixture(scope="module")

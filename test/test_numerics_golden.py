@@ -61,20 +61,21 @@ def test_closing_tolerance_brings_the_spike_peak_within_budget(cfg):
 
 
 def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):
-    """Behaviour against a fresh tight reference, fixed centre, 1250 rpm / 6 bar, where the 1.5° output grid
-    samples the closing chamber's ≈ 2° wide spike far from its top: the waveform's sampled maximum misses the
-    budget (−2.15 % measured: solver +0.56 %, grid −2.71 %), while the model's peak output
-    (``Outputs.chamber_peak_pressures``, from the ROS2 sub-steps) is within it (+1.6 %).  Each row's peak is
-    at least both of its step's end pressures."""
-    rpm, bar = 1250.0, 6.0
+    """Behaviour against a fresh tight reference, fixed centre, 2250 rpm / 14 bar, where the 1.5° output grid
+    samples the closing chamber's ≈ 2° wide spike far from its top: the reference itself, read at the
+    default's output angles, misses more than the whole budget (−2.25 % measured), and so does the default's
+    sampled waveform (−2.08 %), while the model's peak output (``Outputs.chamber_peak_pressures``, from the
+    ROS2 sub-steps) is within it (+0.95 %).  Each row's peak is at least both of its step's end pressures."""
+    rpm, bar = 2250.0, 14.0
     ref = reference_revolution(cfg, rpm, bar, "fixed")
     res = run_steady(PumpModel(cfg, "fixed"), rpm, bar, max_revolutions=40, rtol=1e-6)
     err = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
-    assert err["sampled_peak_error"] < -BUDGET["peak_pressure_error"], err
+    assert err["peak_sampling_error"] < -BUDGET["peak_pressure_error"], err     # the grid alone misses > 2 %
     assert abs(err["peak_pressure_error"]) <= BUDGET["peak_pressure_error"], err
+    assert err["peak_pressure_error"] > err["sampled_peak_error"] + 0.01, err   # sees the top between samples
     o = res.outputs
     assert np.all(o.chamber_peak_pressures >= o.chamber_pressures)
-    assert np.all(o.chamber_peak_pressures[1:] >= o.chamber_pressures[:-1] - 1e-6 * o.chamber_pressures[:-1])
+    assert np.all(o.chamber_peak_pressures[1:] >= o.chamber_pressures[:-1])
 
 
 def test_rate_fraction_default_and_wired_through(cfg):

@@ -50,7 +50,8 @@ G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # W
 #: Columns of Workspace.jac after ∂f/∂y (N+1 columns), as offsets from N+1: ∂f/∂t without the closing ports,
 #: then per row j the closing ports' shares of it and the time until they close (:func:`closing_ports`,
 #: :func:`closing_share`): suction port → chamber row [1/s²], its time to close [s]; delivery port → chamber
-#: row, → delivery row, its time to close.
+#: row, → delivery row, its time to close (> 0), or −the time since it opened (< 0) if that was within a
+#: quarter of the horizon (one output step: the stepper's tolerance only), else 0.
 J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(N_JAC_EXTRA)
 
 
@@ -280,7 +281,9 @@ def closing_ports(pc, op, p, rho, geo, jac, horizon):
     :func:`rhs` with the Jacobian) into their own columns, with their time to close (``J_*``), for
     :func:`closing_share` (and the stepper's tighter tolerance on a chamber whose delivery port closes).
     The time to close is the linear extrapolation A / (−ω dA/dθ); ``horizon`` must be at least the
-    longest sub-step (the stepper passes 4 output steps).
+    longest sub-step (the stepper passes 4 output steps).  A delivery port that opened within a quarter
+    of ``horizon`` gets −its age instead (no share moved: for the stepper's tolerance only; the chamber
+    refilled from the delivery kidney through it spikes too).
 
     A port is closing where its open area falls (table slope < 0).  Its share is recomputed from the
     first stage's pressures, densities and chamber geometry (``Workspace.p``, ``rho``, ``geo``):
@@ -307,6 +310,8 @@ def closing_ports(pc, op, p, rho, geo, jac, horizon):
             jac[j, n1 + J_CS] = c
             jac[j, n1 + J_FT] -= c
         tc = _time_to_close(geo[j, G_AD], geo[j, G_DAD], w, horizon)
+        if tc == 0.0:      # opened within one output step? (time to close, backwards in time, = its age)
+            tc = -_time_to_close(geo[j, G_AD], -geo[j, G_DAD], w, 0.25 * horizon)
         jac[j, n1 + J_TCD] = tc
         if tc > 0.0:
             count += 1

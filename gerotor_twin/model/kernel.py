@@ -19,10 +19,11 @@ A port that closes during the sub-step would, linearised, keep closing through
 zero area: its share of f_t is scaled by min(1, t_c/h), t_c its time to close
 (:func:`.flows.closing_ports`).  The sub-step is also capped so that no chamber
 pressure moves by more than ``numerics.rate_fraction`` × (p_delivery − p_suction)
-in it, and a chamber whose delivery port closes within four output steps has its
-error tolerance multiplied by ``numerics.closing_tolerance``: the pressure spike of
-the throttled, compressed chamber forms there, and the embedded error estimate
-under-reads it (docs/numerics.md).  The error of a
+in it, and a chamber whose delivery port closes within four output steps (or opened
+within the last one) has its error tolerance multiplied by
+``numerics.closing_tolerance``: the pressure spike of the throttled, compressed
+chamber forms there (and that of a chamber refilled from the delivery kidney), and
+the embedded error estimate under-reads it (docs/numerics.md).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
@@ -138,8 +139,8 @@ def _error_weights(km, op, ws):
             ws.wt[i] = 0.0                                          # the delivered-volume quadrature
         elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
             tol = pc.tolerance
-            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] > 0.0:     # delivery port closing: the spike
-                tol *= pc.closing_tolerance
+            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
+                tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
             ws.wt[i] = max(ws.beta[i] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
