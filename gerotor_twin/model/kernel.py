@@ -150,9 +150,9 @@ def _error_weights(km, op, ws):
 def _track_peak(y, h, n, ws):
     r"""Raise ``ws.peak`` to the max of each chamber's ln ρ over the accepted sub-step of h [s] that ended at y.
 
-    ROS2's continuous extension [4] (second order, like the step, and L-stable: it stays between the
-    ends for a stiff chamber, where a Hermite cubic through the end rates overshoots) is a parabola
-    in the stages ``ws.k1``, ``ws.k2`` of the sub-step:
+    ROS2's continuous extension [4] (second order, like the step; it does not overshoot a stiff
+    chamber's relaxation, where a Hermite cubic through the end rates does) is a parabola in the
+    stages ``ws.k1``, ``ws.k2`` of the sub-step:
 
     .. math::
         y(t_n + sh) = y_n + h\left[b_1(s) k_1 + b_2(s) k_2\right],\qquad
@@ -160,7 +160,9 @@ def _track_peak(y, h, n, ws):
 
     (:math:`b_1(1) = 3/2`, :math:`b_2(1) = 1/2`: the step itself); its maximum inside the sub-step,
     if any, and the end y are the candidates.  The sub-steps resolve a pressure spike that the
-    output grid samples only at its angles.
+    output grid samples only at its angles.  Limit: for a stiff chamber that follows a moving
+    quasi-equilibrium the extension is convex under a concave top, so such a top is seen only
+    through the sub-step ends (docs/numerics.md, "Accuracy of the defaults").
     """
     for i in range(n):
         if y[i] > ws.peak[i]:

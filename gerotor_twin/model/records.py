@@ -98,7 +98,8 @@ class Outputs:
         """Outputs at requested times [s] (linear interpolation between steps).
 
         Returns a dict of arrays keyed like the fields (per-chamber fields get
-        shape (len(times), N)).  Times outside the call's span are an error.
+        shape (len(times), N); not ``chamber_peak_pressures``, a maximum over each
+        step, which does not interpolate).  Times outside the call's span are an error.
         """
         t = np.atleast_1d(np.asarray(times, dtype=float))
         if self.t.size == 0 or t.min() < self.t[0] - 1e-12 or t.max() > self.t[-1] + 1e-12:
