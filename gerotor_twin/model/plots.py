@@ -63,12 +63,15 @@ def plot_geometry(g: GerotorGeometry, path, theta: float = 0.35, ports=None):
 
 
 def plot_steady(result, path):
-    """Chamber-1 pressure vs shaft angle (fig. 14 of [1]) and delivery flow vs angle."""
+    """Chamber-1 pressure vs shaft angle (fig. 14 of [1]) with its peak between output angles, delivery flow
+    and tooth-tip gaps vs angle."""
     o = result.outputs
     ang = np.degrees(o.theta - o.theta[0] + (o.theta[1] - o.theta[0]))
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7.5, 8.5), sharex=True)
     p_atm = result.p_atm
     a1.plot(ang, pa_abs_to_bar_gauge(o.chamber_pressures[:, 0], p_atm), label="chamber 1")
+    a1.step(ang, pa_abs_to_bar_gauge(o.chamber_peak_pressures[:, 0], p_atm), where="pre", lw=0.6, alpha=0.8,
+            label="chamber 1, peak within each output step")
     a1.plot(ang, pa_abs_to_bar_gauge(o.delivery_pressure, p_atm), "k--", lw=0.8, label="delivery")
     a1.set_ylabel("gauge pressure [bar]")
     a1.legend(fontsize=8)
