@@ -94,7 +94,7 @@ def assert_same(decoded, expected, where: str = "msg") -> None:
             assert_same(d, e, f"{where}[{i}]")
     elif isinstance(expected, list) and expected and isinstance(expected[0], str):
         assert list(decoded) == expected, where
-    elif isinstance(expected, list):
+    elif isinstance(expected, (list, np.ndarray)):
         np.testing.assert_array_equal(np.asarray(decoded, dtype=float), np.asarray(expected, float),
                                       err_msg=where)
     else:

@@ -24,6 +24,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 import struct
 from typing import Any, Callable
 
@@ -51,21 +52,27 @@ def _pad(buf: bytearray, align: int) -> None:
 
 def encode_float64_multiarray(msg: dict) -> bytes:
     """CDR bytes of a :func:`gerotor_twin.io.messages.float64_multiarray` dict."""
-    buf = bytearray(b"\x00\x01\x00\x00")
-    dims = msg["layout"]["dim"]
-    buf += struct.pack("<I", len(dims))
-    for d in dims:
-        label = str(d["label"]).encode("utf-8") + b"\x00"
-        _pad(buf, 4)
-        buf += struct.pack("<I", len(label)) + label
-        _pad(buf, 4)
-        buf += struct.pack("<II", int(d["size"]), int(d["stride"]))
-    _pad(buf, 4)
+    layout = msg["layout"]
+    dims = tuple((str(d["label"]), int(d["size"]), int(d["stride"])) for d in layout["dim"])
     data = np.asarray(msg["data"], dtype="<f8")
-    buf += struct.pack("<II", int(msg["layout"]["data_offset"]), data.size)
-    if data.size:
+    return _multiarray_head(dims, int(layout["data_offset"]), data.size) + data.tobytes()
+
+
+@functools.lru_cache(maxsize=256)
+def _multiarray_head(dims: tuple, data_offset: int, n: int) -> bytes:
+    """Encapsulation, layout and data length of a Float64MultiArray (the periodic outputs repeat a few)."""
+    buf = bytearray(b"\x00\x01\x00\x00")
+    buf += struct.pack("<I", len(dims))
+    for label, size, stride in dims:
+        raw = label.encode("utf-8") + b"\x00"
+        _pad(buf, 4)
+        buf += struct.pack("<I", len(raw)) + raw
+        _pad(buf, 4)
+        buf += struct.pack("<II", size, stride)
+    _pad(buf, 4)
+    buf += struct.pack("<II", data_offset, n)
+    if n:
         _pad(buf, 8)
-        buf += data.tobytes()
     return bytes(buf)
 
 
