@@ -90,8 +90,9 @@ PARAMETERS: tuple[Param, ...] = (
     Param("log_summary_values", False, "also log the twin/flow_summary/<name> Float64 topics (they repeat "
                                        "twin/flow_summary, which the shipped layouts label by name) [-]"),
     Param("log_waveform_every", 500, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
-    Param("log_outputs_every", 5, "log every N-th publication of chamber pressures, delivery flow, "
-                                  "eccentricity, tooth gaps (1 = all; inputs and flow_summary: always all) [-]",
+    Param("log_outputs_every", 10, "log every N-th publication of chamber pressures, delivery flow, "
+                                  "eccentricity, tooth gaps, chamber peaks (1 = all; inputs and flow_summary: "
+                                  "always all) [-]",
           1, 1000000),
     Param("log_diagnostics_every", 10, "log every N-th /diagnostics message (1 = all; ERROR/WARN changes "
                                       "are always logged) [-]", 1, 1000000),

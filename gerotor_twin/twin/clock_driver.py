@@ -82,6 +82,7 @@ class ClockDriver:
         self._inputs: Inputs | None = None
         self._last_row: tuple | None = None
         self._gap_min = np.full(self.N, np.inf)
+        self._peak_max = np.full(self.N, -np.inf)
         self._counts_base: dict[str, int] = {}
         self._stats: dict[str, Any] = {
             "ticks": 0, "simulated_s": 0.0, "compute_s": 0.0, "skips": 0, "skipped_s": 0.0,
@@ -219,6 +220,7 @@ class ClockDriver:
             self.epoch_ns = g
             self.recorder.drop()
             self._gap_min[:] = np.inf
+            self._peak_max[:] = -np.inf
             self._stats["initialised"] += 1
         self._inputs = inputs
         self.status = "running"
@@ -259,6 +261,7 @@ class ClockDriver:
         if len(out) == 0:
             return
         self._gap_min = np.minimum(self._gap_min, out.gaps.min(axis=0))
+        self._peak_max = np.maximum(self._peak_max, out.chamber_peak_pressures.max(axis=0))
         self._last_row = (out.chamber_pressures[-1], float(out.delivery_flow[-1]), out.eccentricity[-1])
         self.recorder.record(out)
 
@@ -266,9 +269,10 @@ class ClockDriver:
         if self._last_row is None:
             return
         p, q, e = self._last_row
-        gaps = self._gap_min if np.all(np.isfinite(self._gap_min)) else None
-        if gaps is None or not O.all_finite(p, q, e, gaps):
+        gaps, peaks = self._gap_min, self._peak_max       # since the previous publication
+        if not O.all_finite(p, q, e, gaps, peaks):
             self._stats["nonfinite_suppressed"] += 1
             return
-        res.messages.extend(O.instantaneous(t_ns, p, q, e, gaps.copy()))
+        res.messages.extend(O.instantaneous(t_ns, p, q, e, gaps, peaks))   # (float64_multiarray copies)
         self._gap_min[:] = np.inf
+        self._peak_max[:] = -np.inf

@@ -18,6 +18,10 @@ topic (relative)            type                             content (SI)
                                                              frame ``pump_housing`` (z = 0)
 ``twin/tooth_gaps``         std_msgs/Float64MultiArray       N minimum tooth-tip gap heights [m] since
                                                              the previous publication; label ``gap``
+``twin/chamber_peak_pressures`` std_msgs/Float64MultiArray   N highest chamber pressures, absolute [Pa],
+                                                             since the previous publication, from the
+                                                             solver's sub-steps (a spike between two
+                                                             output angles included); label ``chamber``
 ``twin/chamber_waveform``   std_msgs/Float64MultiArray       once per revolution: 2-D (``sample`` ×
                                                              ``angle_p``): column 0 the angle within the
                                                              revolution [rad], columns 1..N the chamber
@@ -46,6 +50,7 @@ DELIVERY_FLOW = "twin/delivery_flow"
 FLOW_SUMMARY = "twin/flow_summary"
 ECCENTRICITY = "twin/eccentricity"
 TOOTH_GAPS = "twin/tooth_gaps"
+CHAMBER_PEAKS = "twin/chamber_peak_pressures"
 CHAMBER_WAVEFORM = "twin/chamber_waveform"
 HEALTH = "twin/health"          #: health estimate, once per settled interval (:mod:`gerotor_twin.twin.health`)
 DIAGNOSTICS_TOPIC = "/diagnostics"
@@ -57,12 +62,13 @@ OUTPUT_TOPICS: dict[str, str] = {
     FLOW_SUMMARY: m.FLOAT64_MULTIARRAY,
     ECCENTRICITY: m.VECTOR3_STAMPED,
     TOOTH_GAPS: m.FLOAT64_MULTIARRAY,
+    CHAMBER_PEAKS: m.FLOAT64_MULTIARRAY,
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
     HEALTH: m.FLOAT64_MULTIARRAY,
 }
 
 #: The outputs published at ``publish_rate_hz`` (instantaneous values).
-INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS)
+INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS, CHAMBER_PEAKS)
 #: Order of the values in ``twin/flow_summary``.
 SUMMARY_FIELDS = ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")
 #: One std_msgs/Float64 topic per summary value: ``twin/flow_summary/<field>``.
@@ -105,8 +111,12 @@ def all_finite(*arrays) -> bool:
     return all(bool(np.all(np.isfinite(np.asarray(a, dtype=float)))) for a in arrays)
 
 
-def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min) -> list[OutputMessage]:
-    """The four periodic outputs at one instant (caller checked finiteness)."""
+def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min, peaks) -> list[OutputMessage]:
+    """The periodic outputs at one instant (caller checked finiteness).
+
+    ``pressures`` [Pa], ``flow`` [m³/s], ``ecc`` [m] at the instant; ``gaps_min`` [m] and ``peaks``
+    [Pa] per chamber since the previous publication.
+    """
     return [
         OutputMessage(CHAMBER_PRESSURES, m.FLOAT64_MULTIARRAY, stamp_ns,
                       m.float64_multiarray(pressures, ("chamber",))),
@@ -114,6 +124,7 @@ def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min) -> list[
         OutputMessage(ECCENTRICITY, m.VECTOR3_STAMPED, stamp_ns,
                       m.vector3_stamped(stamp_ns, float(ecc[0]), float(ecc[1]), 0.0)),
         OutputMessage(TOOTH_GAPS, m.FLOAT64_MULTIARRAY, stamp_ns, m.float64_multiarray(gaps_min, ("gap",))),
+        OutputMessage(CHAMBER_PEAKS, m.FLOAT64_MULTIARRAY, stamp_ns, m.float64_multiarray(peaks, ("chamber",))),
     ]
 
 
