@@ -140,6 +140,18 @@ def test_written_config_loads_and_reproduces(fits, tmp_path):
     assert prov["residuals"]["eta_max_abs"] < 0.005 and "date" in prov
 
 
+def test_thermometer_lag_note():
+    """Behaviour: a note names the fastest oil drift on the plateaus and the reading lag it makes (closed
+    form τ × slope) when no lag is set; nothing when the oil is steady, the slope unknown or a lag set."""
+    from gerotor_twin.offline.plateaus import OIL_DRIFT_NOTE_K_S, thermometer_lag_note
+    recs = [{"oil_slope_k_s": 0.1}, {"oil_slope_k_s": -0.25}, {"oil_slope_k_s": float("nan")}]
+    note = thermometer_lag_note(recs, 0.0)
+    assert "0.25 K/s" in note and "(3 s: 0.8 K)" in note and "--oil-sensor-tau" in note
+    assert thermometer_lag_note(recs, 3.0) is None
+    assert thermometer_lag_note([{"oil_slope_k_s": 0.5 * OIL_DRIFT_NOTE_K_S}], 0.0) is None
+    assert thermometer_lag_note([{"oil_slope_k_s": float("nan")}], 0.0) is None
+
+
 def test_cli_end_to_end(bags, tmp_path, capsys):
     """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability."""
     bag = bags[FACTORS[0]][0]
@@ -150,6 +162,8 @@ def test_cli_end_to_end(bags, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "hold-out" in text and "wrote" in text
     r = json.loads(js.read_text())
+    slopes = [abs(p["oil_slope_k_s"]) for p in r["plateau_records"]]
+    assert ("--oil-sensor-tau" in text) == (max(slopes) >= 0.05)     # the emulator warms its oil
     assert r["params"] == ["lateral"] and r["fit"]["unseparable"] == []
     assert "<img" in rep.read_text() and load_config(out).calibration["model"] == "mobility"
     assert main(["calibrate", "--bench", str(bag), "-o", str(out)]) == 2      # exists, no --overwrite

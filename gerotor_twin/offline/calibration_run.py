@@ -192,6 +192,10 @@ def cmd_calibrate(args) -> int:
     print(f"wrote {out} ({res['simulations']} plateau simulations on {res['jobs']} processes, "
           f"{res['wall_time_s']:.1f} s)")
     print_summary(res)
+    from .plateaus import thermometer_lag_note
+    note = thermometer_lag_note(res["plateau_records"], det.oil_sensor_tau_s)
+    if note:
+        print(note)
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=1, default=float))
         print(f"wrote {args.json}")

@@ -17,7 +17,10 @@ from ..report.analysis import binned, find_plateaus, make_grid
 from ..report.data import load_bench
 from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
 
-__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus"]
+__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus", "thermometer_lag_note"]
+
+#: Oil warming or cooling on a plateau beyond which an unset thermometer lag is worth a note [K/s].
+OIL_DRIFT_NOTE_K_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,7 @@ class PlateauRecord:
     flow_m3s: float              #: mean measured delivery flow [m³/s]
     flow_sem_m3s: float          #: standard error of that mean (see :func:`mean_standard_error`) [m³/s]
     bins: int                    #: grid bins averaged [-]
+    oil_slope_k_s: float = math.nan  #: least-squares slope of the oil reading over the plateau [K/s] (NaN: none)
 
     @property
     def rpm(self) -> float:
@@ -86,17 +90,18 @@ def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
     return float(v.mean()) if v.size else math.nan
 
 
-def _oil_on(series, t0: float, t1: float, tau: float) -> float:
-    """Mean oil reading over [t0, t1] [°C], plus ``tau`` × its least-squares slope (the thermometer's lag
-    undone, as the node's ``oil_sensor_tau_s``: :mod:`gerotor_twin.twin.oil_temperature`)."""
+def _oil_on(series, t0: float, t1: float, tau: float) -> tuple[float, float]:
+    """(Mean oil reading over [t0, t1] [°C] plus ``tau`` × its least-squares slope, that slope [K/s]): the
+    thermometer's lag undone, as the node's ``oil_sensor_tau_s`` (:mod:`gerotor_twin.twin.oil_temperature`)."""
     from gerotor_twin.twin.oil_temperature import least_squares_slope
     if series is None or len(series[0]) == 0:
-        return math.nan
+        return math.nan, math.nan
     t, v = np.asarray(series[0]), np.asarray(series[1])
     keep = (t >= t0) & (t <= t1) & np.isfinite(v)
     if not keep.any():
-        return math.nan
-    return float(v[keep].mean()) + (tau * least_squares_slope(t[keep], v[keep]) if tau > 0 else 0.0)
+        return math.nan, math.nan
+    slope = least_squares_slope(t[keep], v[keep])
+    return float(v[keep].mean()) + (tau * slope if tau > 0 else 0.0), slope
 
 
 def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> list[PlateauRecord]:
@@ -117,10 +122,37 @@ def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> lis
         q = grid.q_meas[p.i0:p.i1]
         q = q[np.isfinite(q)]
         sem = mean_standard_error(q, dt)
+        oil, slope = _oil_on(bench.temperature, edges[p.i0], edges[p.i1], settings.oil_sensor_tau_s)
         out.append(PlateauRecord(
             bag=str(path), index=p.index, t0_s=p.t0, t1_s=p.t1,
             omega=float(np.mean(grid.omega[p.i0:p.i1])), p_delivery_pa=float(np.mean(grid.p_delivery[p.i0:p.i1])),
             p_suction_pa=_mean_on(bench.suction_pressure, edges, p.i0, p.i1),
-            oil_temperature_c=_oil_on(bench.temperature, edges[p.i0], edges[p.i1], settings.oil_sensor_tau_s),
-            flow_m3s=float(q.mean()), flow_sem_m3s=sem, bins=int(q.size)))
+            oil_temperature_c=oil, flow_m3s=float(q.mean()), flow_sem_m3s=sem, bins=int(q.size),
+            oil_slope_k_s=slope))
     return out
+
+
+def thermometer_lag_note(records, tau_s: float) -> str | None:
+    """One line for the user when the oil reading drifts on the plateaus and no thermometer lag is set.
+
+    A thermometer with time constant τ reads τ × the warming rate behind the oil; the leakage
+    follows the true temperature (μ falls ≈ 3 %/K for a VG46 near 50 °C), so an unset lag biases
+    fitted clearances (measured: +0.6 % on the clearance factor of an emulated bench warming at
+    0.1–0.37 K/s with a 3 s thermometer, docs/calibration_health.md).
+
+    Parameters
+    ----------
+    records : sequence of PlateauRecord or dict
+        Plateaus with ``oil_slope_k_s`` [K/s].
+    tau_s : float
+        The thermometer lag already undone [s] (``--oil-sensor-tau``); > 0: no note.
+    """
+    if tau_s > 0:
+        return None
+    slopes = [abs(float(r["oil_slope_k_s"] if isinstance(r, dict) else r.oil_slope_k_s)) for r in records]
+    slopes = [x for x in slopes if math.isfinite(x)]
+    if not slopes or max(slopes) < OIL_DRIFT_NOTE_K_S:
+        return None
+    fast = max(slopes)
+    return (f"note: the oil reading drifts by up to {fast:.2f} K/s on the plateaus; a thermometer lagging by τ "
+            f"reads τ × that behind (3 s: {3 * fast:.1f} K). If yours lags, pass --oil-sensor-tau τ [s]")
