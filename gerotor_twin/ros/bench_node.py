@@ -314,7 +314,8 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
     result: dict = {"model": model, "rate_hz": rate, "busy": busy, "params": list(params),
                     "executor": os.environ.get("GEROTOR_TWIN_EXECUTOR", "waitset"),
                     "model_thread": os.environ.get("GEROTOR_TWIN_MODEL_THREAD", "1") != "0",
-                    "repeats": repeats, "startup_s": [], "rows": [], "medians": []}
+                    "repeats": repeats, "startup_s": [], "rows": [], "medians": [],
+                    "load_average_1min": [os.getloadavg()[0]]}
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         for k in range(2):
@@ -343,6 +344,10 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
         finally:
             peer.close()
             stop_busy(busy_procs)
+    result["load_average_1min"].append(os.getloadavg()[0])
+    out(f"machine load (1-min average) {result['load_average_1min'][0]:.2f} at the start, "
+        f"{result['load_average_1min'][1]:.2f} at the end: the node's CPU on a shared or idling machine moves by "
+        "several points between starts (docs/performance.md); compare medians of --node-repeats")
     return result
 
 
