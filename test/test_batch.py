@@ -119,6 +119,7 @@ def test_fleet_calibrate_recovers_the_emulated_clearances(bags, tmp_path):
     for name in ("bench_0", "bench_1"):
         cal = rows[name]["calibration"]
         assert "error" not in cal, cal
+        assert cal["note"] is None                    # the thermometer lag is undone: no note about it
         lo, hi = cal["combinations"][0]["factor_ci95"]
         assert lo <= truth <= hi, (name, cal)
         assert load_config(cal["config"]).calibration["bags"] == [rows[name]["bag"]]

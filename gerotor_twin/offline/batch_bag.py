@@ -79,7 +79,7 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
     import yaml
 
     from .calibration_run import calibrate_bags, fitted_config
-    from .plateaus import DetectorSettings
+    from .plateaus import DetectorSettings, thermometer_lag_note
     try:
         res = calibrate_bags([bag], config_path=config, model=model, jobs=1,
                              detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s))
@@ -91,7 +91,8 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
     return {"config": str(out_dir / "pump_fitted.yaml"), "plateaus": len(res["plateau_records"]),
             "combinations": [{"label": c["label"], "factor": c["factor"], "factor_ci95": c["factor_ci95"]}
                              for c in f["combinations"]],
-            "eta_max_abs": f["eta_error"]["max_abs"]}
+            "eta_max_abs": f["eta_error"]["max_abs"],
+            "note": thermometer_lag_note(res["plateau_records"], oil_sensor_tau_s)}
 
 
 def process_bag(settings: dict, item: dict) -> dict:

@@ -87,8 +87,9 @@ def _fit_cell(cal: dict | None) -> str:
     if c is None:
         return "<td class='l'>nothing identifiable</td>"
     lo, hi = c["factor_ci95"]
+    note = f"<br><span class='warn'>{_e(cal['note'])}</span>" if cal.get("note") else ""
     return (f"<td class='l'>{_e(c['label'])} × {c['factor']:.3f} [{lo:.3f}, {hi:.3f}]; "
-            f"|η err| ≤ {100 * cal['eta_max_abs']:.2f} pt</td>")
+            f"|η err| ≤ {100 * cal['eta_max_abs']:.2f} pt{note}</td>")
 
 
 def fleet_page(out: Path, rows: list[dict], info: list[str]) -> str:
