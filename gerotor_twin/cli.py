@@ -103,7 +103,8 @@ def cmd_simulate(args) -> int:
           f"{pa_abs_to_bar_gauge(s['max_chamber_pressure_pa'], p_atm):.3f} bar gauge")
     ex, ey = s["mean_eccentricity_m"]
     print(f"  mean eccentricity       ({ex * 1e6:.2f}, {ey * 1e6:.2f}) µm")
-    print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm")
+    print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm "
+          f"(lobes not in contact: {s['min_open_tooth_gap_m'] * 1e6:.3f} µm)")
     c = s["counts"]
     if c.get("housing_contact"):
         print(f"  warning: the outer gear reached the housing-film limit (ε = 0.95) in {c['housing_contact']} "

@@ -40,6 +40,26 @@ def test_none_rule_keeps_every_gap_at_the_nominal_clearance(cfg):
     assert pat["delivery_m"] == pytest.approx(cfg.clearances.tooth_tip_m, abs=1e-12)
 
 
+def test_min_open_tooth_gap():
+    """Closed form: each row's contact lobe is left out of the minimum; all gaps equal give that gap."""
+    from gerotor_twin.model.steady import min_open_gap
+    gaps = np.array([[0.0, 5e-6, 9e-6], [7e-6, 0.0, 3e-6], [4e-6, 8e-6, 0.0]])
+    assert min_open_gap(gaps, np.array([0, 1, 2])) == 3e-6
+    assert min_open_gap(np.full((4, 7), 31.4e-6), np.zeros(4, dtype=int)) == 31.4e-6
+    assert np.isnan(min_open_gap(np.zeros((0, 7)), np.zeros(0, dtype=int)))
+
+
+def test_min_open_tooth_gap_in_the_steady_summary(cfg):
+    """Closed form with the none rule (every gap δ); behaviour with the sec. 3.7 rule: one lobe touches
+    (min_tooth_gap_m 0) while the open ones stay between 0 and the largest gap."""
+    s = run_steady(PumpModel(_with(cfg, "none"), "fixed"), 2000, 10, min_revolutions=1, max_revolutions=3).summary()
+    assert s["min_open_tooth_gap_m"] == pytest.approx(cfg.clearances.tooth_tip_m, abs=1e-12)
+    r = run_steady(PumpModel(_with(cfg, "rotate"), "fixed"), 2000, 10, min_revolutions=1, max_revolutions=3)
+    s = r.summary()
+    assert s["min_tooth_gap_m"] == 0.0
+    assert 0.0 < s["min_open_tooth_gap_m"] < float(r.outputs.gaps.max())
+
+
 def test_none_rule_leaves_moving_models_on_the_sec_3_7_rule(cfg):
     """Behaviour: the choice is for the fixed centre only; the mobility model still rests on one contact."""
     m = PumpModel(_with(cfg, "none"), "mobility")

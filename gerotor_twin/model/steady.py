@@ -10,7 +10,27 @@ from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
 
-__all__ = ["SteadyResult", "run_steady", "reference_config"]
+__all__ = ["SteadyResult", "run_steady", "reference_config", "min_open_gap"]
+
+
+def min_open_gap(gaps: np.ndarray, contact_lobe: np.ndarray) -> float:
+    """Smallest tooth-tip gap [m] over the rows, each row's contact lobe left out.
+
+    Under the sec. 3.7 rule one lobe touches at every step (gap 0), so the plain minimum is 0 and
+    says nothing; this is how close the *other* tips come, the gaps that carry the tip leakage.
+
+    Parameters
+    ----------
+    gaps : ndarray (n, N)
+        Gap heights per output row and lobe [m] (``Outputs.gaps``).
+    contact_lobe : ndarray (n,)
+        Per row, the lobe with the smallest gap (``Outputs.contact_lobe``).
+    """
+    g = np.array(gaps, dtype=float)
+    if g.size == 0 or g.shape[1] < 2:
+        return math.nan
+    g[np.arange(g.shape[0]), np.asarray(contact_lobe, dtype=int)] = np.inf
+    return float(g.min())
 
 
 @dataclass(frozen=True)
@@ -48,6 +68,7 @@ class SteadyResult:
             "max_chamber_pressure_pa": float(o.chamber_peak_pressures.max()),   # between output angles too
             "mean_eccentricity_m": [float(e[:, 0].mean()), float(e[:, 1].mean())],
             "min_tooth_gap_m": float(o.gaps.min()),
+            "min_open_tooth_gap_m": min_open_gap(o.gaps, o.contact_lobe),
             "mean_delivery_pressure_pa": float(o.delivery_pressure.mean()),
             "revolutions": self.revolutions,
             "periodicity_error": self.periodicity_error,
