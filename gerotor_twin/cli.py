@@ -104,7 +104,8 @@ def cmd_simulate(args) -> int:
     ex, ey = s["mean_eccentricity_m"]
     print(f"  mean eccentricity       ({ex * 1e6:.2f}, {ey * 1e6:.2f}) µm")
     print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm "
-          f"(lobes not in contact: {s['min_open_tooth_gap_m'] * 1e6:.3f} µm)")
+          f"(lobes not in contact: {s['min_open_tooth_gap_m'] * 1e6:.3f} µm; effective ⟨h³⟩^(1/3) "
+          f"{s['effective_tooth_gap_m'] * 1e6:.2f} µm)")
     c = s["counts"]
     if c.get("housing_contact"):
         print(f"  warning: the outer gear reached the housing-film limit (ε = 0.95) in {c['housing_contact']} "

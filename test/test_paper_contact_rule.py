@@ -49,15 +49,23 @@ def test_min_open_tooth_gap():
     assert np.isnan(min_open_gap(np.zeros((0, 7)), np.zeros(0, dtype=int)))
 
 
+def test_effective_tooth_gap():
+    """Closed form: ⟨h³⟩^(1/3): equal gaps give that gap; gaps 0 and h give h / 2^(1/3)."""
+    from gerotor_twin.model.steady import effective_gap
+    assert effective_gap(np.full((3, 7), 31.4e-6)) == pytest.approx(31.4e-6, rel=1e-12)
+    assert effective_gap(np.array([[0.0, 10e-6]])) == pytest.approx(10e-6 / 2 ** (1 / 3), rel=1e-12)
+
+
 def test_min_open_tooth_gap_in_the_steady_summary(cfg):
     """Closed form with the none rule (every gap δ); behaviour with the sec. 3.7 rule: one lobe touches
     (min_tooth_gap_m 0) while the open ones stay between 0 and the largest gap."""
     s = run_steady(PumpModel(_with(cfg, "none"), "fixed"), 2000, 10, min_revolutions=1, max_revolutions=3).summary()
     assert s["min_open_tooth_gap_m"] == pytest.approx(cfg.clearances.tooth_tip_m, abs=1e-12)
+    assert s["effective_tooth_gap_m"] == pytest.approx(cfg.clearances.tooth_tip_m, rel=1e-9)
     r = run_steady(PumpModel(_with(cfg, "rotate"), "fixed"), 2000, 10, min_revolutions=1, max_revolutions=3)
     s = r.summary()
     assert s["min_tooth_gap_m"] == 0.0
-    assert 0.0 < s["min_open_tooth_gap_m"] < float(r.outputs.gaps.max())
+    assert 0.0 < s["min_open_tooth_gap_m"] < s["effective_tooth_gap_m"] < float(r.outputs.gaps.max())
 
 
 def test_none_rule_leaves_moving_models_on_the_sec_3_7_rule(cfg):

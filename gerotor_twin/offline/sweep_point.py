@@ -41,7 +41,7 @@ OPERATING_FIELDS = {
 OUTPUTS = (
     "volumetric_efficiency", "delivery_flow_ripple", "min_chamber_pressure_pa", "max_chamber_pressure_pa",
     "cavitation_share", "mean_eccentricity_abs_m", "mean_eccentricity_x_m", "mean_eccentricity_y_m",
-    "min_tooth_gap_m", "min_open_tooth_gap_m", "theoretical_flow_m3s", "mean_delivery_flow_m3s", "mean_delivery_pressure_pa",
+    "min_tooth_gap_m", "min_open_tooth_gap_m", "effective_tooth_gap_m", "theoretical_flow_m3s", "mean_delivery_flow_m3s", "mean_delivery_pressure_pa",
     "revolutions", "periodicity_error", "counts.housing_contact", "counts.solver_failures",
     "counts.cavitation_clamps",
 )
