@@ -142,15 +142,14 @@ def thermometer_lag_note(records, tau_s: float) -> str | None:
 
     Parameters
     ----------
-    records : sequence of PlateauRecord or dict
-        Plateaus with ``oil_slope_k_s`` [K/s].
+    records : sequence of dict
+        Plateaus as stored in a calibration result (``PlateauRecord.as_dict``), with ``oil_slope_k_s`` [K/s].
     tau_s : float
         The thermometer lag already undone [s] (``--oil-sensor-tau``); > 0: no note.
     """
     if tau_s > 0:
         return None
-    slopes = [abs(float(r["oil_slope_k_s"] if isinstance(r, dict) else r.oil_slope_k_s)) for r in records]
-    slopes = [x for x in slopes if math.isfinite(x)]
+    slopes = [abs(r["oil_slope_k_s"]) for r in records if math.isfinite(r["oil_slope_k_s"])]
     if not slopes or max(slopes) < OIL_DRIFT_NOTE_K_S:
         return None
     fast = max(slopes)
