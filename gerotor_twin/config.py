@@ -106,6 +106,8 @@ class OperatingRange:
 
 
 ERROR_MEASURES = ("pressure", "log_density")
+#: How the mobility method's outer gear meets the pressure step (``numerics.gear_coupling``, model/gear_coupling.py)
+GEAR_COUPLINGS = ("stages", "partitioned")
 
 FIXED_CENTRE_CONTACT_RULES = ("rotate", "none")
 CHAMBER_VOLUME_MODES = ("displaced", "nominal")
@@ -152,6 +154,10 @@ class Numerics:
     ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
     four output steps (linear extrapolation of its open area): the pressure spike of the throttled,
     compressed chamber forms there (default 0.25; 1: no change; pressure measure only).
+    ``gear_coupling = "stages"`` (default): the mobility method's gear velocity, linearised in the
+    load over the output step, squeezes the chambers inside the ROS2 stages (implicitly); ``"partitioned"``:
+    the gear is moved after each output step by Heun's method and its squeeze spread over the next step
+    (versions ≤ session 10; Method 1 and FDM always move this way).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048
@@ -162,6 +168,7 @@ class Numerics:
     log_density_tolerance: float = 2e-4
     rate_fraction: float = 0.3
     closing_tolerance: float = 0.25
+    gear_coupling: str = "stages"
 
     def __post_init__(self):
         if int(self.table_points) != self.table_points or not 256 <= self.table_points <= 65536:
@@ -174,6 +181,8 @@ class Numerics:
         check_range("numerics.closing_tolerance", self.closing_tolerance, 1e-3, 1.0)
         if self.error_measure not in ERROR_MEASURES:
             raise InputError("numerics.error_measure", self.error_measure, " | ".join(ERROR_MEASURES))
+        if self.gear_coupling not in GEAR_COUPLINGS:
+            raise InputError("numerics.gear_coupling", self.gear_coupling, " | ".join(GEAR_COUPLINGS))
 
 
 @dataclass(frozen=True)
@@ -339,7 +348,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     rs = _section(raw, "range", {"max_speed_rpm", "max_delivery_bar"}, False)
     rng = OperatingRange(**{k: _num(rs, "range", k) for k in rs})
     ns = _section(raw, "numerics", {f.name for f in fields(Numerics)}, False)
-    num = Numerics(**{k: (str(ns[k]) if k == "error_measure" else
+    num = Numerics(**{k: (str(ns[k]) if k in ("error_measure", "gear_coupling") else
                           int(_num(ns, "numerics", k)) if k == "table_points" else
                           _num(ns, "numerics", k)) for k in ns})
     _check_ports(ports["suction"], ports["delivery"])

@@ -84,16 +84,19 @@ def test_config_uses_the_recorded_calibration(cfg):
 @pytest.mark.parametrize("volumes", ["nominal", "displaced"])
 def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
     """Mobility, Method 1 and FDM: trajectories within 1 % of δ at every point of the cycle (chamber volumes of
-    the centred gear, as in the paper; measured ≤ 0.03 µm).
+    the centred gear, as in the paper: measured ≤ 0.03 µm; of the displaced gear: ≤ 0.06 µm).
 
     Why so close (the film models differ by 1.5–13 % in force for the same eccentricity,
     docs/bearing.md): under the pressure load the outer gear rests on the inner gear at
     almost every step (the sec. 3.7 overlap check binds), so the position is set by the
     gear geometry and the film model only decides how fast it gets there.
     With the volumes of the displaced gear (the default since issue 13) the gear's speed also
-    squeezes the closed chambers, so the film model's speed reaches the pressures: the median
-    difference stays below 1 % of δ (measured 0.014 µm), the largest, 1–3 steps after a contact
-    switch, below 3 % of δ (measured 0.44 µm Method 1, 0.89 µm FDM).
+    squeezes the closed chambers; every bearing model moves inside the ROS2 stages
+    (``gear_coupling``), and the largest difference stays below 1 % of δ too (measured 0.043 µm
+    Method 1, 0.061 µm FDM).  Until session 11 it reached 0.70 / 0.52 µm, 1–3 steps after a contact
+    switch: Method 1 and FDM, stepped one output step per call, lost the gear's squeeze velocity
+    at every step where the overlap check re-projected the gear by round-off
+    (``volumes.PLACEMENT_TOLERANCE``).
     The cycles start at the same shaft angle (``chamber_cycle``).
     """
     if volumes == "nominal":
@@ -105,10 +108,7 @@ def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
         e = section4["cycles"][m].eccentricity
         assert e.shape == ref.shape
         d = np.hypot(*(e - ref).T)
-        if volumes == "nominal":
-            assert d.max() < 0.01 * delta, m
-        else:
-            assert np.median(d) < 0.01 * delta and d.max() < 0.03 * delta, (m, d.max())
+        assert d.max() < 0.01 * delta, (m, d.max())
         assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
     assert np.ptp(ref[:, 0]) > 0.1 * delta      # and the trajectory is not a point
 

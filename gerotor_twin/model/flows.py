@@ -35,6 +35,7 @@ from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import port_orifice_flow
 from ..hydraulics.state_equation import exp_small, state_of
 from .contact import column, locate
+from .gear_coupling import GC_ON, gear_squeeze
 from .volumes import displace_chamber, volumes_moved
 from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
                      FL_SUCTION_DELIVERY, N_JAC_EXTRA)
@@ -237,7 +238,8 @@ def assemble(km, op, ws, f, jac, want_jac):
 
     Left out (small, and any approximation keeps ROS2 second order): the θ-dependence of the
     tooth-tip flows (κ_rel, v_r), of the displaced-volume terms and of the gaps; the lateral and line
-    leakages do not depend on θ.
+    leakages do not depend on θ.  The squeeze of the gear in the stages books its own
+    (:func:`.gear_coupling.gear_squeeze`).
     """
     n = km.pc.n
     n1 = n + 1
@@ -373,4 +375,6 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     port_flows(km, op, ws, jac, want_jac)
     tip_flows(gaps, km, op, ws, jac, want_jac)
     line_flows(km, op, ws, jac, want_jac)
+    if ws.gear[GC_ON] != 0.0:           # the mobility method's gear inside the stages (gear_coupling)
+        gear_squeeze(theta, km.tab, n, km.eos.p_atm, ws.p, ws.beta, ws.acc, ws.gear, ws.gear_rows, jac, want_jac)
     assemble(km, op, ws, f, jac, want_jac)

@@ -28,10 +28,13 @@ sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
 right-hand side and Jacobian evaluated at the end of the previous output step
-(and after a rejected sub-step).  The outer-gear micro-motion is advanced
-after each output step by Heun's method on the bearing model
-(partitioned scheme: the bearing time constants, ≳ 0.3 ms, are long against
-the step), with the load from the new pressures.
+(and after a rejected sub-step).  The mobility method's outer gear moves inside
+the stages: its velocity, linearised in the load over the output step, squeezes
+the chambers, and its Jacobian is part of W (:mod:`.gear_coupling`); the gear is
+placed at the end of the step where ∫ė dt takes it.  Method 1, FDM and
+``numerics.gear_coupling: partitioned`` move it after each output step by Heun's
+method on the bearing model, with the load from the new pressures (the squeeze
+of that move is spread over the next step: :mod:`.volumes`).
 
 Nothing here allocates: every scratch array lives in the model's
 :class:`~.params.Workspace`.
@@ -57,6 +60,7 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import J_TCD, closing_ports, closing_share, rhs
+from .gear_coupling import GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
 from .loads import outer_gear_load
 from .params import ERROR_PRESSURE, FL_DELIVERY
 from .volumes import move_volumes
@@ -187,6 +191,8 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     chamber peaks are tracked (:func:`_track_peak`).
     """
     rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
+    if ws.gear[GC_ON] != 0.0:
+        close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     _error_weights(km, op, ws)
     cap = math.inf
@@ -287,6 +293,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             for i in range(n1):
                 y[i] = ws.ynew[i]
             ws.ctrl[CT_PENDING] = h               # its ∫ flow dt is closed by the next first stage
+            ws.gear[GC_PEND] = h                  # and its ∫ė dt
             for k in range(pc.n):
                 ws.gaps0[k] = ws.gaps1[k]
             ws.ctrl[CT_FRESH] = 0.0
@@ -344,15 +351,20 @@ def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
                               ws.cmat, True)      # ws.cmat holds θ's coefficients (pressure_step)
     fx2, fy2, _fc2, _unl2 = outer_gear_load(ws.pres, theta, omega, px, py, kc2, km)
     d2x, d2y = velocity(px, py, fx2, fy2, omega2, bparams)
-    ex += 0.5 * h * (d1x + d2x)
-    ey += 0.5 * h * (d1y + d2y)
+    ex, ey = housing_cap(ex + 0.5 * h * (d1x + d2x), ey + 0.5 * h * (d1y + d2y), pc, counters)
+    return ex, ey, fx, fy
+
+
+@njit(inline="always")
+def housing_cap(ex, ey, pc, counters):
+    """(ex, ey) [m] with |e| capped at ε_max·c (counted as housing contact)."""
     en = math.hypot(ex, ey)
     cap = pc.eps_max * pc.housing_clearance
     if en > cap:
         ex *= cap / en
         ey *= cap / en
         counters[C_HOUSING_CONTACT] += 1
-    return ex, ey, fx, fy
+    return ex, ey
 
 
 @njit(inline="always")
@@ -392,8 +404,16 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     moved by the caller: :func:`integrate_external`).
     """
     pc = km.pc
+    # the gear inside the stages (numerics.gear_coupling: model/gear_coupling.py); MOVE_EXTERNAL: set up by
+    # the caller (integrate_external), one output step per call
+    coupled = move != MOVE_FIXED and gear_in_stages(km)
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
+    if not coupled:
+        ws.gear[GC_ON] = 0.0
+    elif move == MOVE_MOBILITY:
+        to_pressures(y, km, ws.pres)
+        linearise(ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
@@ -409,7 +429,14 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         t += h
         fx = 0.0
         fy = 0.0
-        if move == MOVE_MOBILITY:
+        if coupled:
+            fx, fy, _fc, unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
+            counters[C_CONTACT_UNLOADED] += unl
+            px, py = gear_move(ex, ey, theta, km, ws.pres, ws.gear, ws.gear_rows)
+            ws.disp[0] = ex + ws.gear[GC_DEX]      # where the stages' squeeze has taken the volumes: only the
+            ws.disp[1] = ey + ws.gear[GC_DEY]      # rest of the move is squeezed over the next step (move_volumes)
+            ex, ey = housing_cap(px, py, pc, counters)
+        elif move == MOVE_MOBILITY:
             bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
             ex, ey, fx, fy = heun_step(mobility_kernel, bp, ex, ey, h, theta, op.omega, kc, km, ws, counters)
         elif move == MOVE_FIXED:
@@ -419,6 +446,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         move_volumes(km.tab, ws.disp, ex, ey, h)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
+        if coupled and move == MOVE_MOBILITY:
+            linearise(ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
@@ -427,14 +456,25 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     return theta, t
 
 
+@njit(inline="always")
+def gear_in_stages(km):
+    """True if a moving gear's squeeze goes into the ROS2 stages (numerics.gear_coupling, displaced volumes)."""
+    return km.tab.volumes_follow_gear and km.pc.gear_in_stages
+
+
 def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters,
                        integrals):
     """Output steps with a bearing model other than the mobility method (Method 1, FDM): a Python loop.
 
-    Each output step is one compiled :func:`integrate` step with the gear held,
-    then the same :func:`heun_step` with ``bearing.kernel`` and ``bearing.params``
-    (compiled for it in each process: numba caches no function that takes a function).
+    Each output step is one compiled :func:`integrate` step.  With the gear in the stages
+    (:mod:`.gear_coupling`) it is set up here before the step with ``bearing.kernel`` (three
+    calls) and moved by the step itself; else the step holds the gear and the same
+    :func:`heun_step` moves it afterwards (compiled for the kernel in each process: numba
+    caches no function that takes a function).
     """
+    if gear_in_stages(km):
+        return _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak,
+                                             rec_gap, counters, integrals)
     for i in range(n_steps):
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
@@ -448,4 +488,16 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
         rec[i, R_EX], rec[i, R_EY], rec[i, R_FX], rec[i, R_FY] = ex, ey, fx, fy
         rec[i, R_GAMMA], rec[i, R_KC], rec[i, R_MIN_GAP] = gam, kc, ws.gaps0.min()
         rec_gap[i] = ws.gaps0
+    return theta, t
+
+
+def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap,
+                                  counters, integrals):
+    """:func:`integrate_external` with the gear in the stages: linearise with ``bearing``, then one step."""
+    for i in range(n_steps):
+        ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
+        to_pressures(y, km, ws.pres)
+        linearise_with(bearing, ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
+                             rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
     return theta, t

@@ -27,6 +27,7 @@ from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from ..hydraulics.orifice import ORIFICE_LAWS
+from .gear_coupling import N_GEAR
 from ..hydraulics.state_equation import (StateEquation, bulk_modulus_of, exp_small, log_density_of, state_equation,
                                          with_liquid_modulus)
 
@@ -92,6 +93,7 @@ class PumpConstants(NamedTuple):
     orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
     laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
     closing_tolerance: float = 1.0  #: factor on ``tolerance`` where a delivery port is closing (numerics) [-]
+    gear_in_stages: bool = False  #: the mobility gear's squeeze inside the ROS2 stages (numerics.gear_coupling) [-]
 
 
 class KernelModel(NamedTuple):
@@ -147,6 +149,8 @@ class Workspace(NamedTuple):
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
     peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
+    gear: np.ndarray        #: (N_GEAR,) the outer gear's velocity in the stages (:mod:`.gear_coupling`, ``GC_*``)
+    gear_rows: np.ndarray   #: (N, 4) per chamber ∂V/∂e [m³/m] and ∂F/∂p [N/Pa] of the coupled load (gear_coupling)
 
 
 def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float) -> tuple[float, float, float]:
@@ -183,7 +187,8 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
         log_density_tolerance=n.log_density_tolerance, closing_tolerance=n.closing_tolerance,
-        orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta)
+        orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta,
+        gear_in_stages=n.gear_coupling == "stages")
     return KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
 
 
@@ -222,4 +227,5 @@ def workspace(n: int) -> Workspace:
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
-                     disp=v(4), peak=np.full(n, -np.inf))
+                     disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
+                     gear_rows=np.zeros((n, 4)))

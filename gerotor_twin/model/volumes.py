@@ -28,7 +28,12 @@ from .._jit import njit
 from ..geometry.tables import DFX, DFY, FX, FY
 from .contact import column, locate
 
-__all__ = ["volumes_moved", "displace_chamber", "move_volumes"]
+__all__ = ["volumes_moved", "displace_chamber", "move_volumes", "PLACEMENT_TOLERANCE"]
+
+#: A placement closer than this to the current position [m] is the same state (the overlap check of sec. 3.7
+#: re-projects a gear at contact by round-off when it is called again on the same state, e.g. at every
+#: output step of :func:`.kernel.integrate_external`).
+PLACEMENT_TOLERANCE = 1e-15
 
 
 @njit(inline="always")
@@ -57,7 +62,8 @@ def move_volumes(tab, disp, ex, ey, h):
     """The chamber volumes follow the gear to (ex, ey) [m], moved over the last step h [s] (0: placed).
 
     A placement (h = 0) at another position than the current one (a new state) clears the
-    squeeze velocity; at the same position it is kept (``advance`` calls in sequence).
+    squeeze velocity; at the same position (within :data:`PLACEMENT_TOLERANCE`) it is kept
+    (``advance`` calls in sequence).
     Nothing happens with nominal volumes (``tab.volumes_follow_gear`` False).
     """
     if not tab.volumes_follow_gear:
@@ -65,7 +71,7 @@ def move_volumes(tab, disp, ex, ey, h):
     if h > 0.0:
         disp[2] = (ex - disp[0]) / h
         disp[3] = (ey - disp[1]) / h
-    elif ex != disp[0] or ey != disp[1]:
+    elif abs(ex - disp[0]) + abs(ey - disp[1]) > PLACEMENT_TOLERANCE:
         disp[2] = 0.0
         disp[3] = 0.0
     disp[0] = ex

@@ -1,0 +1,169 @@
+"""The mobility gear inside the ROS2 stages (model/gear_coupling.py; numerics.gear_coupling).
+
+Tiers: CLOSED FORM (the coupled load against the independent Eqs. (24)–(27) implementation of
+model/loads.py, G against central differences of the mobility velocity, the squeeze Jacobian
+against difference quotients of the right-hand side) and BEHAVIOUR (the spike relief against a
+fresh tight reference; the partitioned scheme kept for comparison).
+"""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gerotor_twin.bearing.mobility import mobility_velocity
+from gerotor_twin.model import flows as F
+from gerotor_twin.model import gear_coupling as GC
+from gerotor_twin.model.accuracy import BUDGET, Revolution, compare, reference_revolution
+from gerotor_twin.model.contact import contact
+from gerotor_twin.model.loads import outer_gear_load
+from gerotor_twin.model.params import operating
+from gerotor_twin.model.pump import Inputs, PumpModel
+from gerotor_twin.model.steady import run_steady
+
+P_ATM = 101325.0
+
+
+@pytest.fixture(scope="module")
+def warm(cfg):
+    """Mobility model after 0.1 s at 2000 rpm / 20 bar: the workspace holds the last step's coupling."""
+    m = PumpModel(cfg, "mobility")
+    inp = Inputs(2000 * math.pi / 30, P_ATM, P_ATM + 20e5)
+    s, _ = m.advance(m.initial_state(inp), 0.1, inp)
+    return m, inp, s
+
+
+def _linearised(m, inp, s, theta):
+    """A fresh coupling at (e, θ) of the state ``s``, as the stepper sets it up after an output step."""
+    km, ws = m.kernel, m._ws
+    gaps = np.empty(m.N)
+    cmat = np.empty((m.N, 9))
+    ex, ey, _g, kc = contact(km.tab, m.N, km.pc.tip_clearance, theta, s.eccentricity[0], s.eccentricity[1], gaps, cmat)
+    pres = np.asarray(s.pressures, dtype=float).copy()
+    GC.linearise(ex, ey, theta, inp.omega, kc, km, pres, ws.gear, ws.gear_rows)
+    return ex, ey, kc, pres, gaps
+
+
+@pytest.mark.parametrize("bearing", ["short", "fdm"])
+def test_every_bearing_model_moves_in_the_stages(cfg, bearing):
+    """Behaviour: Method 1 and the FDM bearing are linearised with their own velocity kernel (from Python) and move
+    in the stages too, so the section-4 comparison of the film models is not one of coupling schemes."""
+    m = PumpModel(cfg, bearing)
+    inp = Inputs(2000 * math.pi / 30, P_ATM, P_ATM + 20e5)
+    st, out = m.advance(m.initial_state(inp), 0.003, inp)
+    assert m._ws.gear[GC.GC_ON] == 1.0
+    assert np.all(np.isfinite(out.eccentricity)) and np.ptp(out.eccentricity[:, 0]) > 0.0
+
+
+def test_the_workspace_of_a_mobility_run_is_coupled(cfg, warm):
+    """Behaviour: after an advance with the default numerics the stages carry the gear (GC_ON); the partitioned
+    setting and the fixed centre leave it off."""
+    m, inp, s = warm
+    assert cfg.numerics.gear_coupling == "stages"
+    assert m._ws.gear[GC.GC_ON] == 1.0
+    for c, name in ((replace(cfg, numerics=replace(cfg.numerics, gear_coupling="partitioned")), "mobility"),
+                    (cfg, "fixed")):
+        other = PumpModel(c, name)
+        other.advance(other.initial_state(inp), 0.002, inp)
+        assert other._ws.gear[GC.GC_ON] == 0.0, name
+
+
+def test_coupled_load_is_the_outer_gear_load(warm):
+    """Closed form: at the linearisation point the coupled load equals Eqs. (24)–(27) of model/loads.py (contact
+    force included); at other chamber pressures too while the contact stays loaded (the load is linear in p)."""
+    m, inp, s = warm
+    km, ws = m.kernel, m._ws
+    for theta in (s.theta, s.theta + 0.3, s.theta + 1.1):
+        ex, ey, kc, pres, _ = _linearised(m, inp, s, theta)
+        for scale in (1.0, 1.1):
+            p = pres.copy()
+            p[:m.N] = P_ATM + scale * (pres[:m.N] - P_ATM)
+            fx, fy, fc, unl = outer_gear_load(p, theta, inp.omega, ex, ey, kc, km)
+            assert unl == 0 and fc > 0.0
+            gx, gy = GC.coupled_load(p, theta, km.tab, m.N, km.eos.p_atm, ws.gear, ws.gear_rows)
+            assert math.hypot(gx - fx, gy - fy) <= 1e-9 * math.hypot(fx, fy), (theta, scale)
+
+
+def test_linearised_velocity_is_the_mobility_and_its_load_derivative(warm):
+    """Closed form: ė₀ is the mobility velocity at (e, F₀) (Eqs. (7)–(13)); G matches central differences of it
+    (relative step 1e-4) to 1e-5 of its norm."""
+    m, inp, s = warm
+    km, ws = m.kernel, m._ws
+    pc = km.pc
+    ex, ey, _kc, _p, _g = _linearised(m, inp, s, s.theta)
+    gc = ws.gear
+    fx, fy = gc[GC.GC_F0X], gc[GC.GC_F0Y]
+    w2 = inp.omega * (m.N - 1) / m.N
+
+    def v(a, b):
+        return np.array(mobility_velocity(ex, ey, a, b, w2, pc.housing_clearance, pc.width, 2 * pc.journal_radius,
+                                          pc.viscosity))
+    assert np.allclose([gc[GC.GC_V0X], gc[GC.GC_V0Y]], v(fx, fy), rtol=1e-12, atol=0.0)
+    d = 1e-4 * math.hypot(fx, fy)
+    g = np.column_stack([(v(fx + d, fy) - v(fx - d, fy)) / (2 * d), (v(fx, fy + d) - v(fx, fy - d)) / (2 * d)])
+    ours = np.array([[gc[GC.GC_GXX], gc[GC.GC_GXY]], [gc[GC.GC_GYX], gc[GC.GC_GYY]]])
+    assert np.abs(ours - g).max() <= 1e-5 * np.abs(g).max(), (ours, g)
+
+
+def test_squeeze_jacobian_matches_finite_differences(warm):
+    """Closed form: the squeeze part of ∂f/∂y, −(Gᵀf_j)·g_k β_k / V_j, against central differences of the
+    right-hand side with the coupling on minus off, row by row; in some row it is a sizeable part of the
+    Jacobian (> 1 % of its largest entry; 2.8 % measured here, where the ports and the lateral lands dominate)."""
+    m, inp, s = warm
+    km, ws = m.kernel, m._ws
+    op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
+    theta = s.theta + 0.2
+    _ex, _ey, _kc, _p, gaps = _linearised(m, inp, s, theta)
+    y = np.asarray(s.log_density, dtype=float).copy()
+    n1 = m.N + 1
+
+    def rhs(yy, on):
+        ws.gear[GC.GC_ON] = 1.0 if on else 0.0
+        f = np.empty(n1)
+        jac = np.empty((n1, n1 + F.N_JAC_EXTRA))
+        F.rhs(yy, theta, gaps, km, op, ws, f, jac, True)
+        return f, jac[:, :n1].copy()
+
+    part = rhs(y, True)[1] - rhs(y, False)[1]
+    fd = np.empty((n1, n1))
+    for k in range(n1):
+        yp, ym = y.copy(), y.copy()
+        yp[k] += 1e-9
+        ym[k] -= 1e-9
+        fd[:, k] = ((rhs(yp, True)[0] - rhs(yp, False)[0]) - (rhs(ym, True)[0] - rhs(ym, False)[0])) / 2e-9
+    ws.gear[GC.GC_ON] = 1.0
+    full = rhs(y, True)[1]
+    share = []
+    for j in range(m.N):
+        scale = np.abs(fd[j]).max()
+        assert scale > 0.0, j
+        assert np.abs(part[j] - fd[j]).max() <= 1e-4 * scale, (j, part[j], fd[j])
+        share.append(scale / np.abs(full[j]).max())
+    assert max(share) > 0.01, share
+    assert np.all(part[m.N] == 0.0) and np.all(part[:, m.N] == 0.0)       # the delivery volume takes no load
+
+
+@pytest.mark.parametrize("rpm, bar", [(1000.0, 5.0)])
+def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(cfg, rpm, bar):
+    """Behaviour against fresh tight references (each scheme its own; they agree to 0.05 % RMS), mobility,
+    Merritt's orifice law, 1000 rpm / 5 bar: the closing chamber's spike is relieved by the gear it pushes.
+    Moved after the output step, the gear answers one step late and the peak overshoots beyond the 2 % budget
+    (+2.29 % measured); with its squeeze in the stages it is within (+0.2 % measured).  RMS 0.43 → 0.32 %."""
+    c0 = replace(cfg, orifice=replace(cfg.orifice, law="merritt"))
+    pd = cfg.fluid.atmospheric_pa + bar * 1e5
+    err = {}
+    for scheme in ("partitioned", "stages"):
+        c = replace(c0, numerics=replace(c0.numerics, gear_coupling=scheme))
+        ref = reference_revolution(c, rpm, bar, "mobility")
+        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+        err[scheme] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)
+    assert err["partitioned"]["peak_pressure_error"] > BUDGET["peak_pressure_error"], err
+    assert abs(err["stages"]["peak_pressure_error"]) <= 0.5 * BUDGET["peak_pressure_error"], err
+    assert err["stages"]["rms_pressure_error"] < err["partitioned"]["rms_pressure_error"], err
+
+
+def test_gear_coupling_is_validated(cfg):
+    """Behaviour: an unknown scheme is refused with the field and the allowed values."""
+    from gerotor_twin.errors import InputError
+    with pytest.raises(InputError, match="numerics.gear_coupling.*stages | partitioned"):
+        replace(cfg.numerics, gear_coupling="implicit")
