@@ -43,21 +43,28 @@ def test_default_numerics_within_budget_below_the_rated_pressure(cfg, rpm, bar):
 
 
 def test_closing_tolerance_brings_the_spike_peak_within_budget(cfg):
-    """Behaviour against a fresh tight reference (:func:`reference_revolution`), mobility, 1000 rpm / 5 bar,
-    where the peak error is the solver's (the output grid misses 0.2 %): without the tighter tolerance on
-    chambers whose delivery port closes (``closing_tolerance`` 1) the spike's peak overshoots beyond the
-    2 % budget (+3.9 % measured); with the default 0.25 it is within (+1.8 %)."""
+    """Behaviour against fresh tight references (:func:`reference_revolution`), mobility, 1000 rpm / 5 bar,
+    where the peak error is the solver's (the output grid misses 0.2 %).  With the gear moved after each output
+    step (``gear_coupling: partitioned``), without the tighter tolerance on chambers whose delivery port closes
+    (``closing_tolerance`` 1) the spike's peak overshoots beyond the 2 % budget (+3.9 % measured) and with the
+    default 0.25 it is within (+1.73 %).  With the gear in the stages (default) the gear relieves part of the
+    spike itself: +2.00 % with the factor 1 (at the budget's edge), +1.55 % with 0.25."""
     rpm, bar = 1000.0, 5.0
-    ref = reference_revolution(cfg, rpm, bar, "mobility")
     pd = cfg.fluid.atmospheric_pa + bar * 1e5
     peak = {}
-    for factor in (1.0, cfg.numerics.closing_tolerance):
-        c = replace(cfg, numerics=replace(cfg.numerics, closing_tolerance=factor))
-        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
-        peak[factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)["peak_pressure_error"]
+    for scheme in ("partitioned", "stages"):
+        c0 = replace(cfg, numerics=replace(cfg.numerics, gear_coupling=scheme))
+        ref = reference_revolution(c0, rpm, bar, "mobility")
+        for factor in (1.0, cfg.numerics.closing_tolerance):
+            c = replace(c0, numerics=replace(c0.numerics, closing_tolerance=factor))
+            res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+            peak[scheme, factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa,
+                                           pd)["peak_pressure_error"]
     assert cfg.numerics.closing_tolerance == 0.25
-    assert peak[1.0] > BUDGET["peak_pressure_error"], peak
-    assert abs(peak[0.25]) <= BUDGET["peak_pressure_error"], peak
+    assert peak["partitioned", 1.0] > BUDGET["peak_pressure_error"], peak
+    assert abs(peak["partitioned", 0.25]) <= BUDGET["peak_pressure_error"], peak
+    assert abs(peak["stages", 0.25]) <= BUDGET["peak_pressure_error"], peak
+    assert peak["stages", 0.25] < peak["stages", 1.0] - 0.002, peak
 
 
 def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):

@@ -376,5 +376,5 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     tip_flows(gaps, km, op, ws, jac, want_jac)
     line_flows(km, op, ws, jac, want_jac)
     if ws.gear[GC_ON] != 0.0:           # the mobility method's gear inside the stages (gear_coupling)
-        gear_squeeze(theta, km.tab, n, km.eos.p_atm, ws.p, ws.beta, ws.acc, ws.gear, ws.gear_rows, jac, want_jac)
+        gear_squeeze(theta, n, km.eos.p_atm, ws.p, ws.beta, ws.acc, ws.gear, ws.gear_rows, jac, want_jac)
     assemble(km, op, ws, f, jac, want_jac)

@@ -51,37 +51,50 @@ __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity"
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
 #: accepted state; ∫ė dt over the output step so far [m]; length of the accepted sub-step whose ∫ė dt is
-#: pending [s]
+#: pending [s]; shaft angle of the step start θ₀ [rad]
 (GC_ON, GC_V0X, GC_V0Y, GC_F0X, GC_F0Y, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_CX, GC_CY, GC_FCX, GC_FCY,
- GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND) = range(20)
-N_GEAR = 20
+ GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0) = range(21)
+N_GEAR = 21
+#: columns of ``Workspace.gear_rows`` (N, 12): per chamber f_j = ∂V_j/∂e [m³/m] and g_j = ∂F/∂p_j [N/Pa] at θ₀,
+#: their slopes in θ over the output step [1/rad], and both at the angle of the last right-hand side
+ROW_F, ROW_G, ROW_DF, ROW_DG, ROW_NOW_F, ROW_NOW_G = 0, 2, 4, 6, 8, 10
+N_ROWS = 12
 
 #: Relative load step of the finite-difference G (the velocity is smooth in F away from F = 0).
 _DF_REL = 1e-6
 
 
 @njit(inline="always")
-def coupled_load(pres, theta, tab, n, p_atm, gc, rows):
-    """Load F(p, θ) [N] with the contact held as at the step start; per chamber (f_j, g_j) into ``rows`` (N, 4).
-
-    ``pres``: chamber pressures [Pa]; ``tab``, ``n``: the kernel tables and N; ``p_atm`` [Pa].
-    """
-    fx = gc[GC_FCX]
-    fy = gc[GC_FCY]
+def _table_rows(theta, tab, n, gc, rows, col):
+    """f_j and g_j = f_j + T_j c of every chamber at θ [rad] from the tables into ``rows[:, col:col + 4]``."""
     for j in range(n):
         i0, i1, f = locate(tab, theta + j * tab.shift)
         a = column(tab, FX, i0, i1, f)
         b = column(tab, FY, i0, i1, f)
         t = column(tab, TQ, i0, i1, f)
-        gx = a + t * gc[GC_CX]
-        gy = b + t * gc[GC_CY]
-        rows[j, 0] = a
-        rows[j, 1] = b
-        rows[j, 2] = gx
-        rows[j, 3] = gy
+        rows[j, col] = a
+        rows[j, col + 1] = b
+        rows[j, col + 2] = a + t * gc[GC_CX]
+        rows[j, col + 3] = b + t * gc[GC_CY]
+
+
+@njit(inline="always")
+def coupled_load(pres, theta, n, p_atm, gc, rows):
+    """Load F(p, θ) [N] with the contact held as at the step start; f_j, g_j at θ into ``rows`` (``ROW_NOW_*``).
+
+    f_j and g_j are interpolated linearly in θ over the output step (no table lookup in the right-hand
+    side; their curvature over 1.5° is far below the tables' own resolution error).
+    ``pres``: chamber pressures [Pa]; ``n``: N; ``p_atm`` [Pa].
+    """
+    w = theta - gc[GC_TH0]
+    fx = gc[GC_FCX]
+    fy = gc[GC_FCY]
+    for j in range(n):
+        for k in range(4):
+            rows[j, ROW_NOW_F + k] = rows[j, ROW_F + k] + w * rows[j, ROW_DF + k]
         pg = pres[j] - p_atm
-        fx += pg * gx                                   # Eqs. (24)-(26)
-        fy += pg * gy
+        fx += pg * rows[j, ROW_NOW_G]                   # Eqs. (24)-(26)
+        fy += pg * rows[j, ROW_NOW_G + 1]
     return fx, fy
 
 
@@ -95,51 +108,41 @@ def gear_velocity(fx, fy, gc):
 
 
 @njit          # called, not inlined: inlined into the right-hand side it slowed the fixed centre too (3 %)
-def gear_squeeze(theta, tab, n, p_atm, p, beta, acc, gc, rows, jac, want_jac):
+def gear_squeeze(theta, n, p_atm, p, beta, acc, gc, rows, jac, want_jac):
     """Squeeze flow −f_j·ė of every chamber into ``acc`` [m³/s] (and its ∂/∂y into ``jac``, before the volume
-    scaling of :func:`.flows.assemble`); ė into ``gc``.  ``p``, ``beta``: pressures and bulk moduli of the
-    volumes [Pa]; takes arrays, not the ``Workspace`` (as :func:`.flows.closing_ports`)."""
-    fx, fy = coupled_load(p, theta, tab, n, p_atm, gc, rows)
+    scaling of :func:`.flows.assemble`, and its ∂/∂θ into ∂f/∂t's column N+1); ė into ``gc``.  ``p``,
+    ``beta``: pressures and bulk moduli of the volumes [Pa]; takes arrays, not the ``Workspace`` (as
+    :func:`.flows.closing_ports`)."""
+    fx, fy = coupled_load(p, theta, n, p_atm, gc, rows)
     vx, vy = gear_velocity(fx, fy, gc)
     gc[GC_VX] = vx
     gc[GC_VY] = vy
     for j in range(n):
-        acc[j] -= rows[j, 0] * vx + rows[j, 1] * vy
+        acc[j] -= rows[j, ROW_NOW_F] * vx + rows[j, ROW_NOW_F + 1] * vy
     if want_jac:
+        dfx = 0.0                                       # ∂F/∂θ at fixed pressures
+        dfy = 0.0
         for j in range(n):
-            ax = gc[GC_GXX] * rows[j, 0] + gc[GC_GYX] * rows[j, 1]      # Gᵀ f_j
-            ay = gc[GC_GXY] * rows[j, 0] + gc[GC_GYY] * rows[j, 1]
+            pg = p[j] - p_atm
+            dfx += pg * rows[j, ROW_DG]
+            dfy += pg * rows[j, ROW_DG + 1]
+        dvx = gc[GC_GXX] * dfx + gc[GC_GXY] * dfy
+        dvy = gc[GC_GYX] * dfx + gc[GC_GYY] * dfy
+        for j in range(n):
+            a = rows[j, ROW_NOW_F]
+            b = rows[j, ROW_NOW_F + 1]
+            ax = gc[GC_GXX] * a + gc[GC_GYX] * b        # Gᵀ f_j
+            ay = gc[GC_GXY] * a + gc[GC_GYY] * b
             for k in range(n):
-                jac[j, k] -= (ax * rows[k, 2] + ay * rows[k, 3]) * beta[k]
-        _squeeze_rate(theta, tab, n, p_atm, p, gc, rows, vx, vy, jac)
+                jac[j, k] -= (ax * rows[k, ROW_NOW_G] + ay * rows[k, ROW_NOW_G + 1]) * beta[k]
+            jac[j, n + 1] -= rows[j, ROW_DF] * vx + rows[j, ROW_DF + 1] * vy + a * dvx + b * dvy
 
 
 @njit(inline="always")
-def _squeeze_rate(theta, tab, n, p_atm, p, gc, rows, vx, vy, jac):
-    """∂/∂θ of the squeeze flows at fixed pressures [m³/(s·rad)] into ∂f/∂t's column N+1 of ``jac`` (before
-    :func:`.flows.assemble` scales it), from the slopes of the tables' linear interpolation:
-    −f_j′·ė − f_j·G·∂F/∂θ, ∂F/∂θ = Σ_k (p_k − p_atm)(f_k′ + T_k′ c)."""
-    dfx = 0.0
-    dfy = 0.0
-    for j in range(n):
-        i0, i1, _f = locate(tab, theta + j * tab.shift)
-        ax = (tab.rows[i1, FX] - tab.rows[i0, FX]) * tab.scale
-        ay = (tab.rows[i1, FY] - tab.rows[i0, FY]) * tab.scale
-        at = (tab.rows[i1, TQ] - tab.rows[i0, TQ]) * tab.scale
-        pg = p[j] - p_atm
-        dfx += pg * (ax + at * gc[GC_CX])
-        dfy += pg * (ay + at * gc[GC_CY])
-        jac[j, n + 1] -= ax * vx + ay * vy
-    dvx = gc[GC_GXX] * dfx + gc[GC_GXY] * dfy
-    dvy = gc[GC_GYX] * dfx + gc[GC_GYY] * dfy
-    for j in range(n):
-        jac[j, n + 1] -= rows[j, 0] * dvx + rows[j, 1] * dvy
-
-
-@njit(inline="always")
-def coupled_load_at(ex, ey, theta, omega, kc, km, pres, gc, rows):
-    """Set up the coupled load of the next output step at (ex, ey) [m], θ [rad], the lobe kc in contact and the
-    chamber pressures ``pres`` [Pa] (as :func:`.loads.outer_gear_load`: Eqs. (24)–(27) of [1]); returns F₀ [N]."""
+def coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
+    """Set up the coupled load of the output step of h [s] from θ [rad] at (ex, ey) [m], the lobe kc in contact
+    and the chamber pressures ``pres`` [Pa] (as :func:`.loads.outer_gear_load`: Eqs. (24)–(27) of [1]):
+    the contact coefficients, f_j and g_j at θ and their slopes to θ + ωh.  Returns F₀ [N]."""
     tab, pc = km.tab, km.pc
     n = pc.n
     cp = 0.0
@@ -163,7 +166,17 @@ def coupled_load_at(ex, ey, theta, omega, kc, km, pres, gc, rows):
         gc[GC_CY] = -ny / (nn * arm)
     gc[GC_FCX] = cjb * gc[GC_CX]
     gc[GC_FCY] = cjb * gc[GC_CY]
-    return coupled_load(pres, theta, tab, n, km.eos.p_atm, gc, rows)
+    gc[GC_TH0] = theta
+    _table_rows(theta, tab, n, gc, rows, ROW_F)
+    dth = omega * h
+    if dth > 0.0:
+        _table_rows(theta + dth, tab, n, gc, rows, ROW_DF)
+        for j in range(n):
+            for k in range(4):
+                rows[j, ROW_DF + k] = (rows[j, ROW_DF + k] - rows[j, ROW_F + k]) / dth
+    else:
+        rows[:, ROW_DF:ROW_DF + 4] = 0.0
+    return coupled_load(pres, theta, n, km.eos.p_atm, gc, rows)
 
 
 @njit(inline="always")
@@ -189,11 +202,11 @@ def set_velocity(gc, fx, fy, v0, v1, v2, d):
 
 
 @njit(inline="always")
-def linearise(ex, ey, theta, omega, kc, km, pres, gc, rows):
-    """Set up the coupling of the next output step with the mobility method (compiled in): the coupled load
-    (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1])."""
+def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
+    """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
+    load (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1])."""
     pc = km.pc
-    fx, fy = coupled_load_at(ex, ey, theta, omega, kc, km, pres, gc, rows)
+    fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
     omega2 = omega * (pc.n - 1) / pc.n
     d = load_step(fx, fy)
@@ -201,10 +214,10 @@ def linearise(ex, ey, theta, omega, kc, km, pres, gc, rows):
                  mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
 
 
-def linearise_with(bearing, ex, ey, theta, omega, kc, km, pres, gc, rows):
+def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """:func:`linearise` with another bearing model's velocity kernel (Method 1, FDM), from Python: numba caches
     no compiled function that takes a function."""
-    fx, fy = coupled_load_at(ex, ey, theta, omega, kc, km, pres, gc, rows)
+    fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     omega2 = omega * (km.pc.n - 1) / km.pc.n
     d = load_step(fx, fy)
     k, bp = bearing.kernel, bearing.params
@@ -234,7 +247,7 @@ def gear_move(ex, ey, theta, km, pres, gc, rows):
     h/2·[M(e₀ + Δe, F₁) − M(e₀, F₁)], measured worse: twice the position error against the
     reference, docs/numerics.md).
     """
-    fx, fy = coupled_load(pres, theta, km.tab, km.pc.n, km.eos.p_atm, gc, rows)
+    fx, fy = coupled_load(pres, theta, km.pc.n, km.eos.p_atm, gc, rows)
     gc[GC_VX], gc[GC_VY] = gear_velocity(fx, fy, gc)
     close_pending(gc)
     return ex + gc[GC_DEX], ey + gc[GC_DEY]

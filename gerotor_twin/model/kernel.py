@@ -413,7 +413,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         ws.gear[GC_ON] = 0.0
     elif move == MOVE_MOBILITY:
         to_pressures(y, km, ws.pres)
-        linearise(ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
@@ -447,7 +447,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
         if coupled and move == MOVE_MOBILITY:
-            linearise(ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
+            linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
@@ -497,7 +497,7 @@ def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, w
     for i in range(n_steps):
         ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
         to_pressures(y, km, ws.pres)
-        linearise_with(bearing, ex, ey, theta, op.omega, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
     return theta, t

@@ -27,7 +27,7 @@ from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from ..hydraulics.orifice import ORIFICE_LAWS
-from .gear_coupling import N_GEAR
+from .gear_coupling import N_GEAR, N_ROWS
 from ..hydraulics.state_equation import (StateEquation, bulk_modulus_of, exp_small, log_density_of, state_equation,
                                          with_liquid_modulus)
 
@@ -150,7 +150,7 @@ class Workspace(NamedTuple):
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
     peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
     gear: np.ndarray        #: (N_GEAR,) the outer gear's velocity in the stages (:mod:`.gear_coupling`, ``GC_*``)
-    gear_rows: np.ndarray   #: (N, 4) per chamber ∂V/∂e [m³/m] and ∂F/∂p [N/Pa] of the coupled load (gear_coupling)
+    gear_rows: np.ndarray   #: (N, N_ROWS) per chamber ∂V/∂e [m³/m] and ∂F/∂p [N/Pa] of the coupled load, their θ-slopes (gear_coupling)
 
 
 def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float) -> tuple[float, float, float]:
@@ -228,4 +228,4 @@ def workspace(n: int) -> Workspace:
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
-                     gear_rows=np.zeros((n, 4)))
+                     gear_rows=np.zeros((n, N_ROWS)))
