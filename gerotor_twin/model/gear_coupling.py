@@ -44,6 +44,7 @@ from .._jit import njit
 from ..bearing.mobility import mobility_kernel
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, locate
+from .loads import journal_torque
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
            "linearise_with", "set_velocity", "close_pending", "gear_move"]
@@ -149,11 +150,7 @@ def coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     for j in range(n):
         i0, i1, f = locate(tab, theta + j * tab.shift)
         cp += (pres[j] - km.eos.p_atm) * column(tab, TQ, i0, i1, f)     # Eq. (25)
-    c = pc.housing_clearance
-    eps = min(math.hypot(ex, ey) / c, 0.999)
-    omega2 = omega * (n - 1) / n
-    cjb = (-2.0 * math.pi * pc.viscosity * omega2 * pc.width * pc.journal_radius ** 3
-           / (c * math.sqrt(1.0 - eps * eps)))                          # Eq. (27), corrected
+    cjb = journal_torque(ex, ey, omega, pc)                               # Eq. (27), corrected
     i0, i1, f = locate(tab, theta + kc * tab.shift)
     arm = column(tab, ARM, i0, i1, f)
     gc[GC_CX] = 0.0

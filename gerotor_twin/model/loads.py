@@ -12,7 +12,22 @@ from .._jit import njit
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, locate
 
-__all__ = ["outer_gear_load"]
+__all__ = ["outer_gear_load", "journal_torque"]
+
+
+@njit(inline="always")
+def journal_torque(ex, ey, omega, pc):
+    """Journal-bearing torque on the outer gear, Eq. (27) of [1] corrected [N·m].
+
+    The Petroff-type torque −2π μ ω₂ L r³ / (c √(1 − ε²)), ω₂ = ω (N − 1)/N the outer gear's speed
+    [rad/s], ε = |e|/c capped at 0.999; (ex, ey) [m], ω the shaft speed [rad/s], ``pc`` the
+    :class:`~.params.PumpConstants`.
+    """
+    c = pc.housing_clearance
+    eps = min(math.hypot(ex, ey) / c, 0.999)
+    omega2 = omega * (pc.n - 1) / pc.n
+    return (-2.0 * math.pi * pc.viscosity * omega2 * pc.width * pc.journal_radius ** 3
+            / (c * math.sqrt(1.0 - eps * eps)))     # Eq. (27), corrected
 
 
 @njit
@@ -55,11 +70,7 @@ def outer_gear_load(pres, theta, omega, ex, ey, kc, km):
         fx += pg * column(tab, FX, i0, i1, f)       # Eq. (24), corrected: p_j (printed p_i)
         fy += pg * column(tab, FY, i0, i1, f)
         cp += pg * column(tab, TQ, i0, i1, f)       # Eq. (25)
-    c = pc.housing_clearance
-    eps = min(math.hypot(ex, ey) / c, 0.999)
-    omega2 = omega * (n - 1) / n
-    cjb = (-2.0 * math.pi * pc.viscosity * omega2 * pc.width * pc.journal_radius ** 3
-           / (c * math.sqrt(1.0 - eps * eps)))     # Eq. (27), corrected
+    cjb = journal_torque(ex, ey, omega, pc)
     i0, i1, f = locate(tab, theta + kc * tab.shift)
     arm = column(tab, ARM, i0, i1, f)
     fc = 0.0
