@@ -52,27 +52,38 @@ __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity"
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
 #: accepted state; ∫ė dt over the output step so far [m]; length of the accepted sub-step whose ∫ė dt is
-#: pending [s]; shaft angle of the step start θ₀ [rad]
+#: pending [s]; shaft angle of the step start θ₀ [rad]; the angle [rad] whose table values ``ROW_RAW1`` holds,
+#: and 1 if it holds any
 (GC_ON, GC_V0X, GC_V0Y, GC_F0X, GC_F0Y, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_CX, GC_CY, GC_FCX, GC_FCY,
- GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0) = range(21)
-N_GEAR = 21
-#: columns of ``Workspace.gear_rows`` (N, 12): per chamber f_j = ∂V_j/∂e [m³/m] and g_j = ∂F/∂p_j [N/Pa] at θ₀,
-#: their slopes in θ over the output step [1/rad], and both at the angle of the last right-hand side
-ROW_F, ROW_G, ROW_DF, ROW_DG, ROW_NOW_F, ROW_NOW_G = 0, 2, 4, 6, 8, 10
-N_ROWS = 12
+ GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0, GC_TH_RAW1, GC_RAW1_OK) = range(23)
+N_GEAR = 23
+#: columns of ``Workspace.gear_rows`` (N, 18): per chamber f_j = ∂V_j/∂e [m³/m] and g_j = ∂F/∂p_j [N/Pa] at θ₀,
+#: their slopes in θ over the output step [1/rad], both at the angle of the last right-hand side, and the
+#: table values (FX, FY, TQ) at θ₀ and at the step's end (reused as the next step's θ₀)
+ROW_F, ROW_G, ROW_DF, ROW_DG, ROW_NOW_F, ROW_NOW_G, ROW_RAW0, ROW_RAW1 = 0, 2, 4, 6, 8, 10, 12, 15
+N_ROWS = 18
 
 #: Relative load step of the finite-difference G (the velocity is smooth in F away from F = 0).
 _DF_REL = 1e-6
 
 
 @njit(inline="always")
-def _table_rows(theta, tab, n, gc, rows, col):
-    """f_j and g_j = f_j + T_j c of every chamber at θ [rad] from the tables into ``rows[:, col:col + 4]``."""
+def _table_values(theta, tab, n, rows, col):
+    """FX, FY, TQ (Eqs. (24)–(25) per unit pressure) of every chamber at θ [rad] into ``rows[:, col:col + 3]``."""
     for j in range(n):
         i0, i1, f = locate(tab, theta + j * tab.shift)
-        a = column(tab, FX, i0, i1, f)
-        b = column(tab, FY, i0, i1, f)
-        t = column(tab, TQ, i0, i1, f)
+        rows[j, col] = column(tab, FX, i0, i1, f)
+        rows[j, col + 1] = column(tab, FY, i0, i1, f)
+        rows[j, col + 2] = column(tab, TQ, i0, i1, f)
+
+
+@njit(inline="always")
+def _load_rows(n, gc, rows, raw, col):
+    """f_j and g_j = f_j + T_j c from the table values ``rows[:, raw:raw + 3]`` into ``rows[:, col:col + 4]``."""
+    for j in range(n):
+        a = rows[j, raw]
+        b = rows[j, raw + 1]
+        t = rows[j, raw + 2]
         rows[j, col] = a
         rows[j, col + 1] = b
         rows[j, col + 2] = a + t * gc[GC_CX]
@@ -146,10 +157,13 @@ def coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     the contact coefficients, f_j and g_j at θ and their slopes to θ + ωh.  Returns F₀ [N]."""
     tab, pc = km.tab, km.pc
     n = pc.n
+    if gc[GC_RAW1_OK] != 0.0 and gc[GC_TH_RAW1] == theta:              # the last step ended at θ
+        rows[:, ROW_RAW0:ROW_RAW0 + 3] = rows[:, ROW_RAW1:ROW_RAW1 + 3]
+    else:
+        _table_values(theta, tab, n, rows, ROW_RAW0)
     cp = 0.0
     for j in range(n):
-        i0, i1, f = locate(tab, theta + j * tab.shift)
-        cp += (pres[j] - km.eos.p_atm) * column(tab, TQ, i0, i1, f)     # Eq. (25)
+        cp += (pres[j] - km.eos.p_atm) * rows[j, ROW_RAW0 + 2]          # Eq. (25)
     cjb = journal_torque(ex, ey, omega, pc)                               # Eq. (27), corrected
     i0, i1, f = locate(tab, theta + kc * tab.shift)
     arm = column(tab, ARM, i0, i1, f)
@@ -164,10 +178,14 @@ def coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     gc[GC_FCX] = cjb * gc[GC_CX]
     gc[GC_FCY] = cjb * gc[GC_CY]
     gc[GC_TH0] = theta
-    _table_rows(theta, tab, n, gc, rows, ROW_F)
+    _load_rows(n, gc, rows, ROW_RAW0, ROW_F)
     dth = omega * h
+    gc[GC_RAW1_OK] = 0.0
     if dth > 0.0:
-        _table_rows(theta + dth, tab, n, gc, rows, ROW_DF)
+        _table_values(theta + dth, tab, n, rows, ROW_RAW1)
+        gc[GC_TH_RAW1] = theta + dth
+        gc[GC_RAW1_OK] = 1.0
+        _load_rows(n, gc, rows, ROW_RAW1, ROW_DF)
         for j in range(n):
             for k in range(4):
                 rows[j, ROW_DF + k] = (rows[j, ROW_DF + k] - rows[j, ROW_F + k]) / dth
@@ -237,9 +255,10 @@ def close_pending(gc):
 
 @njit(inline="always")
 def gear_move(ex, ey, theta, km, pres, gc, rows):
-    """The gear's position [m] after the output step from (ex, ey): the start plus ∫ė dt of the stages.
+    """The gear's position [m] after the output step from (ex, ey): the start plus ∫ė dt of the stages; and the
+    coupled load at the end pressures ``pres`` [Pa] and θ [rad] (contact held from the step start) [N].
 
-    Closes the pending trapezoid at the end pressures ``pres`` [Pa] and θ [rad].  The position
+    Closes the pending trapezoid there.  The position
     dependence of **M** is taken at the step start (a Heun correction with the end load,
     h/2·[M(e₀ + Δe, F₁) − M(e₀, F₁)], measured worse: twice the position error against the
     reference, docs/numerics.md).
@@ -247,4 +266,4 @@ def gear_move(ex, ey, theta, km, pres, gc, rows):
     fx, fy = coupled_load(pres, theta, km.pc.n, km.eos.p_atm, gc, rows)
     gc[GC_VX], gc[GC_VY] = gear_velocity(fx, fy, gc)
     close_pending(gc)
-    return ex + gc[GC_DEX], ey + gc[GC_DEY]
+    return ex + gc[GC_DEX], ey + gc[GC_DEY], fx, fy

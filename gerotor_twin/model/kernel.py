@@ -60,7 +60,7 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import J_TCD, closing_ports, closing_share, rhs
-from .gear_coupling import GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
+from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
 from .loads import outer_gear_load
 from .params import ERROR_PRESSURE, FL_DELIVERY
 from .volumes import move_volumes
@@ -430,9 +430,9 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         fx = 0.0
         fy = 0.0
         if coupled:
-            fx, fy, _fc, unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
-            counters[C_CONTACT_UNLOADED] += unl
-            px, py = gear_move(ex, ey, theta, km, ws.pres, ws.gear, ws.gear_rows)
+            if ws.gear[GC_CX] == 0.0 and ws.gear[GC_CY] == 0.0:
+                counters[C_CONTACT_UNLOADED] += 1          # the contact would pull at the step start
+            px, py, fx, fy = gear_move(ex, ey, theta, km, ws.pres, ws.gear, ws.gear_rows)
             ws.disp[0] = ex + ws.gear[GC_DEX]      # where the stages' squeeze has taken the volumes: only the
             ws.disp[1] = ey + ws.gear[GC_DEY]      # rest of the move is squeezed over the next step (move_volumes)
             ex, ey = housing_cap(px, py, pc, counters)
