@@ -154,10 +154,10 @@ class Numerics:
     ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
     four output steps (linear extrapolation of its open area): the pressure spike of the throttled,
     compressed chamber forms there (default 0.25; 1: no change; pressure measure only).
-    ``gear_coupling = "stages"`` (default): the mobility method's gear velocity, linearised in the
-    load over the output step, squeezes the chambers inside the ROS2 stages (implicitly); ``"partitioned"``:
-    the gear is moved after each output step by Heun's method and its squeeze spread over the next step
-    (versions ≤ session 10; Method 1 and FDM always move this way).
+    ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
+    the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
+    ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
+    over the next step (versions ≤ session 10).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048

@@ -29,8 +29,9 @@ spread over the next step) answers one output step late.  The trapezoid of
 :math:`\dot{\mathbf e}` over the accepted sub-steps is the gear's move (so the volumes the stages
 squeezed are where the gear is); the housing cap and the overlap check's pull-back change it a
 little, and that remainder is squeezed over the next step as before (:func:`.volumes.move_volumes`).
-Numerics config ``gear_coupling: partitioned`` keeps the former scheme; Method 1 and the FDM
-bearing always use it (docs/numerics.md, "The gear in the stages").
+Method 1 and the FDM bearing are linearised the same way with their own velocity kernels
+(:func:`linearise_with`); numerics config ``gear_coupling: partitioned`` keeps the former scheme for
+every bearing model (docs/numerics.md, "The gear in the stages").
 
 References
 ----------

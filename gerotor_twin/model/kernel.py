@@ -28,13 +28,14 @@ sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
 right-hand side and Jacobian evaluated at the end of the previous output step
-(and after a rejected sub-step).  The mobility method's outer gear moves inside
-the stages: its velocity, linearised in the load over the output step, squeezes
-the chambers, and its Jacobian is part of W (:mod:`.gear_coupling`); the gear is
-placed at the end of the step where ∫ė dt takes it.  Method 1, FDM and
-``numerics.gear_coupling: partitioned`` move it after each output step by Heun's
-method on the bearing model, with the load from the new pressures (the squeeze
-of that move is spread over the next step: :mod:`.volumes`).
+(and after a rejected sub-step).  The outer gear moves inside the stages: its
+velocity (mobility method compiled in; Method 1 and FDM set up from Python),
+linearised in the load over the output step, squeezes the chambers, and its
+Jacobian is part of W (:mod:`.gear_coupling`); the gear is placed at the end of
+the step where ∫ė dt takes it.  With ``numerics.gear_coupling: partitioned`` it
+is moved after each output step by Heun's method on the bearing model, with the
+load from the new pressures (the squeeze of that move is spread over the next
+step: :mod:`.volumes`).
 
 Nothing here allocates: every scratch array lives in the model's
 :class:`~.params.Workspace`.
