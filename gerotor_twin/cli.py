@@ -60,6 +60,7 @@ def cmd_geometry(args) -> int:
         "min_convex_curvature_radius_m": g.min_convex_curvature_radius(),
         "suction_port_deg": [round(math.degrees(v), 4) for v in (cfg.suction_port.start, cfg.suction_port.end)],
         "delivery_port_deg": [round(math.degrees(v), 4) for v in (cfg.delivery_port.start, cfg.delivery_port.end)],
+        "suction_closing_edge": cfg.suction_port.closing_edge,
     }
     print(f"Gerotor {g.chambers}/{g.chambers - 1} from {cfg.source}")
     for k, v in info.items():

@@ -228,10 +228,9 @@ class PumpConfig:
                       "outer_root_radius_m": g.outer_root_radius, "outer_radius_m": g.outer_radius,
                       "inner_hole_radius_m": g.inner_hole_radius, "width_m": g.width},
             "clearances": _asdict(self.clearances),
-            "ports": {"suction": {"start_deg": math.degrees(self.suction_port.start),
-                                  "end_deg": math.degrees(self.suction_port.end)},
-                      "delivery": {"start_deg": math.degrees(self.delivery_port.start),
-                                   "end_deg": math.degrees(self.delivery_port.end)}},
+            "ports": {p.name: {"start_deg": math.degrees(p.start), "end_deg": math.degrees(p.end),
+                               "closing_edge": p.closing_edge}
+                      for p in (self.suction_port, self.delivery_port)},
             "fluid": _fluid_dict(self),
             **_oil_dict(self),
             "orifice": _asdict(self.orifice),
@@ -328,13 +327,13 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     ps = _section(raw, "ports", {"suction", "delivery"})
     ports = {}
     for name in ("suction", "delivery"):
-        p = _section(ps, name, {"start_deg", "end_deg"}) if name in ps else None
+        p = _section(ps, name, {"start_deg", "end_deg", "closing_edge"}) if name in ps else None
         if p is None:
             raise InputError(f"ports.{name}", None, "a mapping with start_deg, end_deg", "missing key")
         a0 = _num(p, f"ports.{name}", "start_deg")
         a1 = _num(p, f"ports.{name}", "end_deg")
         check_range(f"ports.{name}.start_deg", a0, 0.0, 360.0, hi_open=True, unit="deg")
-        ports[name] = Port(name, math.radians(a0), math.radians(a1))
+        ports[name] = Port(name, math.radians(a0), math.radians(a1), str(p.get("closing_edge", "ray")))
     fluid, oil, t_ref = _fluid_and_oil(raw)
     ok = {"cd_max", "lambda_crit", "law", "laminar_delta"}
     osec = _section(raw, "orifice", ok, False)

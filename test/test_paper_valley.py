@@ -18,6 +18,7 @@ from gerotor_twin.model.steady import run_steady
 from gerotor_twin.paper.calibration import evaluate, acceptance
 from gerotor_twin.paper.efficiency import with_clearances
 from gerotor_twin.paper.reference import PAPER_EFFICIENCY, PRESSURES_BAR, SPEEDS_RPM
+from gerotor_twin.paper.setting import paper_setting
 from gerotor_twin.paper.valley import closed_paths, loss_split, mm_minus_fixed
 
 VALLEY = Path(__file__).resolve().parents[1] / "docs" / "valley.json"
@@ -69,7 +70,7 @@ def test_tip_conductance_zero_gives_mm_equal_fixed(cfg, valley_rows, rule):
     """Closed form: with the tooth-tip flow switched off (and nominal chamber volumes) nothing the gear's motion
     changes reaches the chambers, so MM − fixed is exactly 0 — at δ = 100 µm, where the gaps matter most."""
     row = valley_rows[100.0]
-    c = with_clearances(cfg.with_fluid_model("paper"), row["tooth_tip_m"], row["lateral_m"])   # the valley is eq. (23)'s
+    c = with_clearances(paper_setting(cfg), row["tooth_tip_m"], row["lateral_m"])   # the valley is eq. (23)'s
     c = replace(c, micro_motion=MicroMotion(fixed_centre_contact=rule, chamber_volumes="nominal"))
     for rpm, bar in ((1000.0, 27.5), (3000.0, 5.0)):
         eta = [run_steady(closed_paths(PumpModel(c, m), tips=True), rpm, bar).volumetric_efficiency
@@ -88,7 +89,7 @@ def test_gap_driven_gain_at_5_bar_stays_far_below_the_papers(cfg, valley_rows, d
     the 27.5-bar gain is large (≥ 1 pt) the 5-bar gain is ≤ 30 % of it (paper: ≥ 70 %): a gap-driven gain
     scales with Δp; the paper's needs a pressure-independent term."""
     row = valley_rows[delta_um]
-    c = with_clearances(cfg.with_fluid_model("paper"), row["tooth_tip_m"], row["lateral_m"])   # the valley is eq. (23)'s
+    c = with_clearances(paper_setting(cfg), row["tooth_tip_m"], row["lateral_m"])   # the valley is eq. (23)'s
     fit = evaluate(c, row["tooth_tip_m"], row["lateral_m"])
     assert acceptance(fit["points"], fit["slopes"])["passed"]
     for rule in ("rotate", "none"):

@@ -38,7 +38,7 @@ import numpy as np
 from .._jit import njit
 from .chambers import chamber_dA_dtheta_closed_form, chamber_polygon, contact_points, ideal, polygon_area
 from .gerotor import GerotorGeometry
-from .ports import Port, open_area
+from .ports import Port, closing_cut, open_area
 
 __all__ = ["GeometryTables", "build_tables", "interp", "COLUMNS"]
 
@@ -171,11 +171,12 @@ def build_tables(g: GerotorGeometry, suction: Port, delivery: Port, size: int = 
     gi = ideal(g)
     b = g.width
     data[DV] = b * chamber_dA_dtheta_closed_form(gi, th, 0)
+    cuts = closing_cut(gi, suction), closing_cut(gi, delivery)
     for i, t in enumerate(th):
         poly = chamber_polygon(gi, t, 0)
         data[V, i] = b * abs(polygon_area(poly))
-        data[AS, i] = open_area(gi, t, suction, poly=poly)
-        data[AD, i] = open_area(gi, t, delivery, poly=poly)
+        data[AS, i] = open_area(gi, t, suction, poly=poly, cut=cuts[0])
+        data[AD, i] = open_area(gi, t, delivery, poly=poly, cut=cuts[1])
         X, _ = contact_points(gi, t)
         a, c = X[0], X[1]
         lx, ly = a[0] - c[0], c[1] - a[1]                 # Eq. (24) projections

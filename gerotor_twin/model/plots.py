@@ -11,6 +11,7 @@ import numpy as np  # noqa: E402
 
 from ..geometry.chambers import chamber_polygon, contact_points  # noqa: E402
 from ..geometry.gerotor import GerotorGeometry  # noqa: E402
+from ..geometry.ports import closing_cut  # noqa: E402
 from ..units import m3s_to_lpm, pa_abs_to_bar_gauge  # noqa: E402
 
 __all__ = ["plot_geometry", "plot_steady", "plot_efficiency_map"]
@@ -50,6 +51,10 @@ def plot_geometry(g: GerotorGeometry, path, theta: float = 0.35, ports=None):
         for port, col in zip(ports, ("tab:blue", "tab:red")):
             a = np.linspace(port.start, port.end, 100)
             ax.plot(rr * np.cos(a), rr * np.sin(a), color=col, lw=3, label=f"{port.name} port")
+            far, cut = closing_cut(g, port)
+            if cut is not None:                 # the closing edge cut to the dead-centre chamber
+                ax.fill(cut[:, 0], cut[:, 1], facecolor="none", edgecolor=col, hatch="///", lw=1, zorder=6,
+                        label=f"{port.name} kidney stops at this chamber outline")
     ax.plot(*g.pitch_point, "k+", ms=10, label="pitch point", zorder=7)
     lim = g.outer_radius * 1.15
     ax.set_xlim(-lim + g.eccentricity, lim + g.eccentricity)

@@ -14,6 +14,7 @@ from dataclasses import replace
 from ..config import PumpConfig
 from ..model.pump import PumpModel
 from ..model.steady import run_steady
+from .setting import paper_setting
 from .reference import PRESSURES_BAR, SPEEDS_RPM, paper_efficiency, slope_per_bar
 
 __all__ = ["with_clearances", "efficiency_points", "row_slopes"]
@@ -52,7 +53,7 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         the paper has no value), ``difference`` [-] (model − paper), ``mean_eccentricity_m``,
         ``min_tooth_gap_m``, ``revolutions``, ``counts``.
     """
-    cfg = replace(cfg.with_fluid_model(fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
+    cfg = replace(paper_setting(cfg, fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
     cache = {} if model_cache is None else model_cache
     total = len(models) * len(speeds) * len(pressures)
     points = []

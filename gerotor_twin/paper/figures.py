@@ -34,6 +34,7 @@ from ..config import PumpConfig  # noqa: E402
 from ..model.pump import PumpModel  # noqa: E402
 from ..model.steady import run_steady  # noqa: E402
 from .section4 import chamber_cycle, run_section4  # noqa: E402
+from .setting import paper_setting  # noqa: E402
 
 __all__ = ["write_figures", "equivalent_length"]
 
@@ -64,7 +65,7 @@ def _models(runs):
 
 def fig12(cfg: PumpConfig, path, speeds=(1000.0, 3000.0), pressures=(5.0, 15.0, 27.5)) -> Path:
     """Tooth-1 gap height vs angle, mobility model, at several speeds and pressures (eq. (23) oil)."""
-    model = PumpModel(cfg.with_fluid_model("paper"), "mobility")
+    model = PumpModel(paper_setting(cfg), "mobility")
     period = model.tables.period
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     for ls, rpm in zip(("-", "--", ":"), speeds):
@@ -160,7 +161,7 @@ def write_figures(cfg: PumpConfig, out_dir, models=MODEL_NAMES, progress=print):
     out = Path(out_dir)
     runs = run_section4(cfg, models, progress=progress)
     progress(f"  restriction area {runs['restriction_area_m2'] * 1e6:.4f} mm²; fig. 12 sweep ...")
-    tables_model = PumpModel(cfg.with_fluid_model("paper"), "fixed")
+    tables_model = PumpModel(paper_setting(cfg), "fixed")
     period, p_atm = tables_model.tables.period, cfg.fluid.atmospheric_pa
     return [fig12(cfg, out / "fig12_gap_vs_pressure_speed.png"),
             fig13(runs, cfg, out / "fig13_trajectories.png"),

@@ -23,6 +23,7 @@ from ..hydraulics.orifice import ORIFICE_LAWS, port_orifice_flow
 from ..model.pump import Inputs, Outputs, PumpModel
 from ..model.steady import SteadyResult, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
+from .setting import paper_setting
 
 __all__ = ["SECTION4_RPM", "SECTION4_BAR", "restriction_area", "run_section4", "chamber_cycle"]
 
@@ -38,7 +39,7 @@ def restriction_area(cfg: PumpConfig, rpm: float = SECTION4_RPM, bar: float = SE
     minus the suction–delivery and drain leakages) of the periodic state at imposed pressure; the area follows from Eq. (21) of [1] with the
     configured Cd(λ) law (solved with :func:`scipy.optimize.brentq`).
     """
-    imposed = replace(cfg.with_fluid_model(fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
+    imposed = replace(paper_setting(cfg, fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
     res = run_steady(PumpModel(imposed, "fixed"), rpm, bar)
     o = res.outputs
     q = float(np.mean(o.delivery_flow))
@@ -63,7 +64,7 @@ def run_section4(cfg: PumpConfig, models=MODEL_NAMES, rpm: float = SECTION4_RPM,
         under the key ``"restriction_area_m2"``, and ``"cycles"`` maps each model to its
         :func:`chamber_cycle` outputs.
     """
-    cfg = cfg.with_fluid_model(fluid_model)     # the paper's eq. (23) unless asked otherwise
+    cfg = paper_setting(cfg, fluid_model)     # the paper's eq. (23) unless asked otherwise
     area = restriction_area(cfg, rpm, bar, fluid_model)
     rcfg = replace(cfg, boundary=replace(cfg.boundary, mode="restriction", restriction_area_m2=area))
     out: dict = {"restriction_area_m2": area, "cycles": {}}

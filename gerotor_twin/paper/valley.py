@@ -31,6 +31,7 @@ from ..model.steady import run_steady
 from .calibration import refit_lateral
 from .efficiency import with_clearances
 from .reference import SPEEDS_RPM
+from .setting import paper_setting
 
 __all__ = ["DEFAULT_DELTAS_UM", "PATHS", "closed_paths", "loss_split", "mm_minus_fixed", "valley_row", "valley"]
 
@@ -91,7 +92,7 @@ def valley_row(cfg: PumpConfig, tooth_tip_m: float, start_lateral_m: float, prog
     t0 = time.perf_counter()
     say(f"δ = {tooth_tip_m * 1e6:6.1f} µm: refitting the lateral clearance ...")
     fit = refit_lateral(cfg, tooth_tip_m, start_lateral_m)
-    c = with_clearances(cfg, tooth_tip_m, fit["lateral_m"])
+    c = with_clearances(paper_setting(cfg, None), tooth_tip_m, fit["lateral_m"])   # the kidneys as calibrated
     say(f"δ = {tooth_tip_m * 1e6:6.1f} µm: lateral {fit['lateral_m'] * 1e6:.1f} µm, rms "
         f"{100 * fit['rms_difference']:.2f} pt ({fit['evaluations']} evaluations); loss split, MM − fixed ...")
     slopes = {s["rpm"]: s["relative_difference"] for s in fit["slopes"]}

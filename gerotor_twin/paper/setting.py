@@ -1,0 +1,27 @@
+"""The pump as the paper's commands run it.
+
+The clearances of ``config/pump.yaml`` were fitted to tables 3–5 of [1] with eq. (23) of [1] and
+kidneys ending at radial rays (docs/paper.md, docs/calibration.json).  The twin's default pump
+is the oil–air–vapour mixture and a suction kidney cut to the chamber outline
+(:mod:`gerotor_twin.geometry.ports`), so every section-4 command goes through
+:func:`paper_setting` to reproduce what was calibrated; ``--fluid-model`` still chooses the oil.
+
+References
+----------
+[1] The paper, ``../shared/paper/gerotor-micromotion-paper.md``.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..config import PumpConfig
+
+__all__ = ["paper_setting"]
+
+
+def paper_setting(cfg: PumpConfig, fluid_model: str | None = "paper") -> PumpConfig:
+    """``cfg`` with the paper's state equation (eq. (23) of [1]; ``None`` keeps the config's) and
+    both kidneys closing at their rays."""
+    c = cfg if fluid_model is None else cfg.with_fluid_model(fluid_model)
+    return replace(c, suction_port=replace(c.suction_port, closing_edge="ray"),
+                   delivery_port=replace(c.delivery_port, closing_edge="ray"))
