@@ -165,7 +165,9 @@ def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(cfg, r
     """Behaviour against fresh tight references (each scheme its own; they agree to 0.05 % RMS), mobility,
     Merritt's orifice law, 1000 rpm / 5 bar: the closing chamber's spike is relieved by the gear it pushes.
     Moved after the output step, the gear answers one step late and the peak overshoots beyond the 2 % budget
-    (+2.29 % measured); with its squeeze in the stages it is within (+0.2 % measured).  RMS 0.43 → 0.32 %."""
+    (+2.26 % measured); with its squeeze in the stages it is within (−0.08 % measured).  Both RMS errors are
+    well inside the budget (0.39 % partitioned, 0.46 % stages; 0.43 → 0.32 % with the ray-edge suction kidney,
+    where the chambers arrived under-filled)."""
     c0 = replace(cfg, orifice=replace(cfg.orifice, law="merritt"))
     pd = cfg.fluid.atmospheric_pa + bar * 1e5
     err = {}
@@ -176,7 +178,7 @@ def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(cfg, r
         err[scheme] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)
     assert err["partitioned"]["peak_pressure_error"] > BUDGET["peak_pressure_error"], err
     assert abs(err["stages"]["peak_pressure_error"]) <= 0.5 * BUDGET["peak_pressure_error"], err
-    assert err["stages"]["rms_pressure_error"] < err["partitioned"]["rms_pressure_error"], err
+    assert max(e["rms_pressure_error"] for e in err.values()) <= 0.5 * BUDGET["rms_pressure_error"], err
 
 
 def test_gear_coupling_is_validated(cfg):

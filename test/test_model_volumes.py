@@ -78,15 +78,17 @@ def test_displacement_grows_along_o1_o2(cfg, fixed_model, tables):
 def test_mass_balance_holds_with_moving_volumes(cfg):
     """Behaviour: with the volumes following the mobility gear (and its squeeze flow), suction-port mass in =
     delivery-port mass out over a periodic revolution, the residual falling with the tolerance as for the
-    fixed gear (measured 1.5e-5 → 6.4e-7 for 2e-8 → 2e-10 with ∂f/∂t in the stages; 6.1e-4 → 7.6e-5 for
-    2e-6 → 2e-8 before; without the squeeze term a moving gear would create mass)."""
+    fixed gear (without the squeeze term a moving gear would create mass).  Measured with the chamber-cut
+    suction kidney: 1.5e-4 → 1.9e-5 → 6.0e-7 for 2e-6 → 2e-7 → 2e-8; at 2e-10 it stays at 4.2e-7, the
+    floor of the periodic-state criterion (rtol 1e-7 on the state between revolutions).  With the ray-edge
+    kidney 1.1e-4 → 7.5e-6 for 2e-6 → 2e-8 (its closing cusp was the harder path)."""
     c = replace(cfg, micro_motion=MicroMotion(chamber_volumes="displaced"))
     res = []
-    for tol in (2e-8, 2e-10):
+    for tol in (2e-6, 2e-8):
         m = PumpModel(reference_config(c, tolerance=tol, max_step_deg=0.5), "mobility")
         o = run_steady(m, 1000.0, 27.5, rtol=1e-7, max_revolutions=60).outputs
         res.append(abs(o.port_mass_in - o.port_mass_out) / o.port_mass_in)
-    assert res[1] < 1e-4 and res[0] / res[1] > 5, res
+    assert res[1] < 1e-5 and res[0] / res[1] > 5, res
 
 
 def test_displaced_volumes_change_only_the_moving_gear(cfg):
