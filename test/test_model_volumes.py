@@ -80,8 +80,8 @@ def test_mass_balance_holds_with_moving_volumes(cfg):
     delivery-port mass out over a periodic revolution, the residual falling with the tolerance as for the
     fixed gear (without the squeeze term a moving gear would create mass).  Measured with the chamber-cut
     suction kidney: 1.5e-4 → 1.9e-5 → 6.0e-7 for 2e-6 → 2e-7 → 2e-8; at 2e-10 it stays at 4.2e-7, the
-    floor of the periodic-state criterion (rtol 1e-7 on the state between revolutions).  With the ray-edge
-    kidney 1.1e-4 → 7.5e-6 for 2e-6 → 2e-8 (its closing cusp was the harder path)."""
+    same with the periodic-state criterion rtol 1e-9: a floor the solver tolerance does not set, not yet
+    traced (with the ray-edge kidney 1.1e-4 → 7.5e-6 → 9.7e-8 for 2e-6 → 2e-8 → 2e-10)."""
     c = replace(cfg, micro_motion=MicroMotion(chamber_volumes="displaced"))
     res = []
     for tol in (2e-6, 2e-8):
