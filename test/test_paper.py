@@ -217,3 +217,19 @@ def test_housing_contact_is_reported_not_clamped_silently(cfg):
     assert s["counts"]["housing_contact"] > 0
     assert np.all(np.isfinite(r.outputs.chamber_pressures)) and math.isfinite(s["volumetric_efficiency"])
     assert max(np.hypot(*r.outputs.eccentricity.T)) <= 0.95 * c * (1 + 1e-9)
+
+
+def test_paper_commands_keep_the_calibrated_ray_kidney(cfg):
+    """Behaviour: the paper's commands run the kidneys the clearances were calibrated with (ray edges),
+    whatever the config says; ``suction_edge="chamber"`` gives the twin's default pump, which fills better
+    at low pressure (fixed centre, 1000 rpm / 5 bar, eq. (23))."""
+    from dataclasses import replace
+    from gerotor_twin.paper.efficiency import efficiency_points
+    ray_cfg = replace(cfg, suction_port=replace(cfg.suction_port, closing_edge="ray"))
+    kw = dict(models=("fixed",), speeds=(1000.0,), pressures=(5.0,))
+    eta = {name: efficiency_points(c, **kw)[0]["volumetric_efficiency"]
+           for name, c in (("default", cfg), ("ray", ray_cfg))}
+    eta["chamber"] = efficiency_points(cfg, suction_edge="chamber", **kw)[0]["volumetric_efficiency"]
+    assert cfg.suction_port.closing_edge == "chamber"
+    assert eta["default"] == eta["ray"]
+    assert eta["chamber"] > eta["ray"] + 1e-3, eta

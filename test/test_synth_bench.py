@@ -143,7 +143,8 @@ def test_bundled_bags_match_the_current_pump_config(cfg, name):
 
     got, want = flat(recorded), flat(expected)
     for key in [k for k in want if k.split(".")[0] in ("gears", "clearances", "ports", "fluid", "leakage")]:
-        assert got[key] == pytest.approx(want[key], rel=1e-9), (name, key, meta["command"])
+        expect = want[key] if isinstance(want[key], str) else pytest.approx(want[key], rel=1e-9)
+        assert got.get(key) == expect, (name, key, meta["command"])
 
 
 @pytest.mark.parametrize("args,needle", [(("--speed-rate", "0"), "speed_rate_hz = 0.0"),

@@ -28,7 +28,7 @@ def with_clearances(cfg: PumpConfig, tooth_tip_m: float, lateral_m: float) -> Pu
 
 def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEEDS_RPM,
                       pressures=PRESSURES_BAR, progress=None, model_cache: dict | None = None,
-                      fluid_model: str = "paper") -> list[dict]:
+                      fluid_model: str = "paper", suction_edge: str = "ray") -> list[dict]:
     """Volumetric efficiency of every (model, speed, pressure) point.
 
     Parameters
@@ -45,6 +45,9 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         Called as ``progress(done, total, point)`` after each point.
     fluid_model : {"paper", "mixture"}
         State equation of the oil: eq. (23) of [1] (default, as calibrated) or the mixture.
+    suction_edge : {"ray", "chamber"}
+        Closing edge of the suction kidney: the ray, as calibrated (default), or the chamber outline
+        of the twin's default pump (:mod:`gerotor_twin.geometry.ports`).
 
     Returns
     -------
@@ -53,7 +56,7 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         the paper has no value), ``difference`` [-] (model − paper), ``mean_eccentricity_m``,
         ``min_tooth_gap_m``, ``revolutions``, ``counts``.
     """
-    cfg = replace(paper_setting(cfg, fluid_model), boundary=replace(cfg.boundary, mode="imposed"))
+    cfg = replace(paper_setting(cfg, fluid_model, suction_edge), boundary=replace(cfg.boundary, mode="imposed"))
     cache = {} if model_cache is None else model_cache
     total = len(models) * len(speeds) * len(pressures)
     points = []

@@ -19,9 +19,10 @@ from ..config import PumpConfig
 __all__ = ["paper_setting"]
 
 
-def paper_setting(cfg: PumpConfig, fluid_model: str | None = "paper") -> PumpConfig:
-    """``cfg`` with the paper's state equation (eq. (23) of [1]; ``None`` keeps the config's) and
-    both kidneys closing at their rays."""
+def paper_setting(cfg: PumpConfig, fluid_model: str | None = "paper", suction_edge: str = "ray") -> PumpConfig:
+    """``cfg`` with the paper's state equation (eq. (23) of [1]; ``None`` keeps the config's), the
+    suction kidney's closing edge ``suction_edge`` (``"ray"`` as calibrated, or ``"chamber"``) and the
+    delivery kidney closing at its ray."""
     c = cfg if fluid_model is None else cfg.with_fluid_model(fluid_model)
-    return replace(c, suction_port=replace(c.suction_port, closing_edge="ray"),
+    return replace(c, suction_port=replace(c.suction_port, closing_edge=suction_edge),
                    delivery_port=replace(c.delivery_port, closing_edge="ray"))
