@@ -46,3 +46,19 @@ def test_intersection_area_of_a_sliver_is_linear_in_the_offset():
     """Closed form: a square slid by ε along a shared edge's normal keeps a 2 × ε strip, down to ε = 1e-9."""
     for eps in (1e-3, 1e-6, 1e-9):
         assert intersection_area(square(0, 0, 2), square(0, 2 - eps, 2)) == pytest.approx(2 * eps, rel=1e-6)
+
+
+def test_clip_half_plane_closed_forms():
+    """Closed form: Sutherland–Hodgman against a half-plane n·x ≥ 0 keeps the exact area, convex or not."""
+    from gerotor_twin.geometry.chambers import polygon_area
+    from gerotor_twin.geometry.ports import clip_half_plane
+
+    def area(poly, normal):
+        return abs(polygon_area(clip_half_plane(poly, np.asarray(normal, float))))
+
+    assert area(square(0, 0, 2), [1.0, -1.0]) == pytest.approx(2.0, abs=1e-15)        # x ≥ y: half
+    assert area(L_SHAPE, [0.0, 1.0]) == pytest.approx(5.0, abs=1e-15)                  # y ≥ 0: all of it
+    assert area(L_SHAPE - [0.0, 0.5], [0.0, -1.0]) == pytest.approx(1.5, abs=1e-15)    # below y = 0.5: 3 × 0.5
+    assert area(L_SHAPE - [0.0, 2.0], [0.0, 1.0]) == pytest.approx(1.0, abs=1e-15)     # the arm above y = 2
+    assert area(L_SHAPE - [0.5, 0.0], [-1.0, 0.0]) == pytest.approx(1.5, abs=1e-15)    # left of x = 0.5: 0.5 × 3
+    assert area(square(0, 0, 1), [-1.0, 0.0]) == 0.0                                   # touches x = 0 only

@@ -95,14 +95,13 @@ def clip_half_plane(poly: np.ndarray, normal: np.ndarray) -> np.ndarray:
     d = poly @ normal
     nxt = np.roll(poly, -1, axis=0)
     dn = np.roll(d, -1)
-    out = []
-    for p, q, dp, dq in zip(poly, nxt, d, dn):
-        if dp >= 0:
-            out.append(p)
-        if (dp >= 0) != (dq >= 0):
-            t = dp / (dp - dq)
-            out.append(p + t * (q - p))
-    return np.array(out) if out else np.zeros((0, 2))
+    keep = d >= 0
+    cross = keep != (dn >= 0)
+    t = np.where(cross, d / np.where(cross, d - dn, 1.0), 0.0)
+    inter = poly + t[:, None] * (nxt - poly)
+    pts = np.stack([poly, inter], axis=1).reshape(-1, 2)     # per edge: its start if kept, then the crossing
+    mask = np.stack([keep, cross], axis=1).reshape(-1)
+    return pts[mask] if mask.any() else np.zeros((0, 2))
 
 
 def _wedge_area(poly: np.ndarray, a0: float, a1: float) -> float:
