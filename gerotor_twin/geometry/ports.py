@@ -10,18 +10,19 @@ chamber at the two dead centres, so no chamber ever sees both ports.
 
 Closing edge
 ------------
-``closing_edge: ray`` (the default) ends the port at the ray ``end``.  A chamber near a dead centre
-is a lens pointed at both seals, so its area past a ray falls to 0 like a cusp: 0.2° before the
-suction dead centre the default pump's chamber sees 3.8e-11 m² of port, and it is sealed while still
-growing, under-filled (docs/fluid.md).  Valve plates are therefore cut with the closing edge following
-the outline of the chamber at the dead centre it moves into [1, 2]: ``closing_edge: chamber`` adds
-to the kidney the part of the wedge from ``end`` to that chamber's centroid angle which the chamber
-at the dead centre does not cover.  The open area then falls linearly to 0 exactly at the dead centre,
-and after it only the inner tooth flank, which turns faster than the outer gear, uncovers a sliver
-of the cut (≤ 2.2e-8 m² over the first 2°, 0.3 % of the area 1° before the dead centre, default
-pump; exact, not round-off: it stays with polygons 4× finer).  The extension lies inside the outer root circle (a chamber
-never reaches past it), so the lateral lands of :mod:`.lateral` keep their angles.  The area is the
-exact polygon intersection of :mod:`.overlap`.
+``closing_edge: ray`` (the form without the key; ``config/pump.yaml`` sets ``chamber``) ends the port
+at the ray ``end``.  A chamber near a dead centre is a lens pointed at both seals, so its area past a
+ray falls to 0 like a cusp: 0.2° before the suction dead centre the default pump's chamber sees
+3.8e-11 m² of port, and it is sealed while still growing, under-filled (docs/fluid.md).  Valve plates
+are therefore cut with the closing edge following the outline of the chamber at the dead centre it
+moves into (e.g. [1, 2]): ``closing_edge: chamber`` adds to the kidney the part of the wedge from
+``end`` to that chamber's centroid angle which the chamber at the dead centre does not cover.  The
+open area then falls linearly to 0 exactly at the dead centre.  After it only the inner tooth flank,
+which turns faster than the outer gear, uncovers a sliver of the cut (≤ 2.2e-8 m² over the first 2°,
+0.3 % of the area 1° before the dead centre, default pump; geometry, not round-off: it stays with
+polygons 4× finer).  The extension lies inside the outer root circle (a chamber never reaches past
+it), so the lateral lands of :mod:`.lateral` keep their angles.  The area is the exact polygon
+intersection of :mod:`.overlap`.
 
 Only the suction kidney takes it.  At the minimum-volume dead centre the chamber is a wide lens
 (2 × 2.6e-5 m² in the default pump) whose trailing part sweeps back over the cut as it grows
@@ -29,8 +30,8 @@ again (6.6e-6 m² open 5° after it), so a delivery kidney cut that way would no
 
 References
 ----------
-[1] Manring, N. D., Fales, R. C., *Hydraulic Control Systems*, 2nd ed., Wiley, 2019, sec. on the
-    valve-plate (port-plate) timing of positive-displacement pumps.
+[1] Manring, N. D., Fales, R. C., *Hydraulic Control Systems*, 2nd ed., Wiley, 2019 (port-plate
+    timing of positive-displacement pumps).
 [2] Rundo, M., "Models for flow rate simulation in gear pumps: a review", Energies 10(9), 1261, 2017
     (port timing and relief grooves of gerotor port plates).
 """
