@@ -154,6 +154,10 @@ class Numerics:
     ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
     four output steps (linear extrapolation of its open area): the pressure spike of the throttled,
     compressed chamber forms there (default 0.25; 1: no change; pressure measure only).
+    ``top_tolerance`` > 0 rejects a sub-step in which a chamber's pressure turns from rising to falling
+    when the top it may hide (the two end tangents' crossing above the higher end) exceeds
+    ``top_tolerance`` × ``tolerance`` × (p_delivery − p_suction) (default 0.25; 0: off; pressure
+    measure only).
     ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
     the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
     ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
@@ -168,6 +172,7 @@ class Numerics:
     log_density_tolerance: float = 2e-4
     rate_fraction: float = 0.3
     closing_tolerance: float = 0.25
+    top_tolerance: float = 0.25
     gear_coupling: str = "stages"
 
     def __post_init__(self):
@@ -179,6 +184,7 @@ class Numerics:
         check_range("numerics.log_density_tolerance", self.log_density_tolerance, 1e-12, 1e-1)
         check_range("numerics.rate_fraction", self.rate_fraction, 0.0, 10.0)
         check_range("numerics.closing_tolerance", self.closing_tolerance, 1e-3, 1.0)
+        check_range("numerics.top_tolerance", self.top_tolerance, 0.0, 1.0)
         if self.error_measure not in ERROR_MEASURES:
             raise InputError("numerics.error_measure", self.error_measure, " | ".join(ERROR_MEASURES))
         if self.gear_coupling not in GEAR_COUPLINGS:

@@ -167,3 +167,29 @@ def test_closing_tolerance_out_of_range_is_refused_naming_the_field(value):
     from gerotor_twin.errors import InputError
     with pytest.raises(InputError, match=r"numerics\.closing_tolerance"):
         Numerics(closing_tolerance=value)
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.5, float("nan")])
+def test_top_tolerance_out_of_range_is_refused_naming_the_field(value):
+    from gerotor_twin.config import Numerics
+    from gerotor_twin.errors import InputError
+    with pytest.raises(InputError, match=r"numerics\.top_tolerance"):
+        Numerics(top_tolerance=value)
+
+
+def test_top_tolerance_finds_the_top_between_sub_steps(cfg):
+    """Behaviour against a fresh tight reference (its log-density measure does not use the top bound),
+    mobility, 2750 rpm / 9 bar, where the closing chamber's top fell between sub-steps: without the bound
+    (``top_tolerance`` 0) the peak output misses it by more than the 2 % budget (−2.31 % measured), with
+    the default 0.25 it is within half of it (−0.43 %)."""
+    rpm, bar = 2750.0, 9.0
+    pd = cfg.fluid.atmospheric_pa + bar * 1e5
+    ref = reference_revolution(cfg, rpm, bar, "mobility")
+    peak = {}
+    for factor in (0.0, cfg.numerics.top_tolerance):
+        c = replace(cfg, numerics=replace(cfg.numerics, top_tolerance=factor))
+        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+        peak[factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)["peak_pressure_error"]
+    assert cfg.numerics.top_tolerance == 0.25
+    assert abs(peak[0.0]) > BUDGET["peak_pressure_error"], peak
+    assert abs(peak[0.25]) <= 0.5 * BUDGET["peak_pressure_error"], peak

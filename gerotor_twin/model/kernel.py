@@ -23,7 +23,9 @@ in it, and a chamber whose delivery port closes within four output steps (or ope
 within the last one) has its error tolerance multiplied by
 ``numerics.closing_tolerance``: the pressure spike of the throttled, compressed
 chamber forms there (and that of a chamber refilled from the delivery kidney), and
-the embedded error estimate under-reads it (docs/numerics.md).  The error of a
+the embedded error estimate under-reads it (docs/numerics.md).  A sub-step inside
+which a chamber pressure turns from rising to falling is also held to the bound on
+the top it may hide (``numerics.top_tolerance``, :func:`_top_error`).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to the delivery–suction pressure difference (or on
 ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
@@ -242,6 +244,7 @@ def ros2_step(y, th, h, km, op, ws):
         ws.y1[i] = y[i] + h * ws.k1[i]
     rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, False)
     for i in range(n1):
+        ws.y1[i] = ws.f1[i]                                # slopes at the predicted end (for _top_error)
         ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
     en = 0.0
@@ -252,6 +255,41 @@ def ros2_step(y, th, h, km, op, ws):
         v = abs(ws.err[i]) * ws.wt[i]
         if not (v <= en):          # also catches NaN
             en = v
+    if km.pc.top_tolerance > 0.0 and km.pc.error_measure == ERROR_PRESSURE:
+        en = _top_error(y, h, km, op, ws, en)
+    return en
+
+
+@njit(inline="always")
+def _top_error(y, h, km, op, ws, en):
+    r"""``en`` raised by the pressure top a sub-step may hide, relative to its allowance.
+
+    Where chamber i's ln ρ rises at the start of the sub-step (slope f₀ = ``ws.f0``) and falls at its
+    predicted end (f₁: the second stage's right-hand side, kept in ``ws.y1``), a top lies inside.
+    If the trajectory is concave there, it lies below both end tangents, so above the higher end it
+    is at most
+
+    .. math::
+        m = h f_0 t^* - \max(0, \Delta),\qquad t^* = \frac{\Delta - h f_1}{h (f_0 - f_1)},
+
+    Δ = y_{n+1,i} − y_{n,i}: where the tangents cross.  The sub-step is rejected (the returned
+    value > 1) when β_i m exceeds ``top_tolerance`` × ``tolerance`` × (p_d − p_s).  Neither the
+    embedded error estimate nor the peak output (:func:`_track_peak`, whose continuous extension is
+    convex under such a top) sees it: without this a spike's top between sub-steps was missed by
+    up to −2.3 % of the pressure difference (docs/numerics.md).
+    """
+    pc = km.pc
+    lim = pc.top_tolerance * pc.tolerance * op.dp_ref
+    for i in range(pc.n):
+        s0 = h * ws.f0[i]
+        s1 = h * ws.y1[i]
+        if s0 > 0.0 and s1 < 0.0:
+            d = ws.ynew[i] - y[i]
+            ts = (d - s1) / (s0 - s1)
+            if 0.0 < ts < 1.0:
+                v = (s0 * ts - max(d, 0.0)) * ws.beta[i] / lim
+                if v > en:
+                    en = v
     return en
 
 

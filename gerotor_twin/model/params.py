@@ -93,6 +93,7 @@ class PumpConstants(NamedTuple):
     orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
     laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
     closing_tolerance: float = 1.0  #: factor on ``tolerance`` where a delivery port is closing (numerics) [-]
+    top_tolerance: float = 0.0    #: factor on ``tolerance`` for a top hidden inside a sub-step (numerics; 0: off) [-]
     gear_in_stages: bool = False  #: the mobility gear's squeeze inside the ROS2 stages (numerics.gear_coupling) [-]
 
 
@@ -187,6 +188,7 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
         log_density_tolerance=n.log_density_tolerance, closing_tolerance=n.closing_tolerance,
+        top_tolerance=n.top_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta,
         gear_in_stages=n.gear_coupling == "stages")
     return KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
