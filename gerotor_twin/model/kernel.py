@@ -255,17 +255,20 @@ def ros2_step(y, th, h, km, op, ws):
         v = abs(ws.err[i]) * ws.wt[i]
         if not (v <= en):          # also catches NaN
             en = v
-    if km.pc.top_tolerance > 0.0 and km.pc.error_measure == ERROR_PRESSURE:
-        en = _top_error(y, h, km, op, ws, en)
+    pc = km.pc
+    if pc.top_tolerance > 0.0 and pc.error_measure == ERROR_PRESSURE:
+        en = _top_error(y, ws.ynew, ws.f0, ws.y1, ws.beta, pc.n, h,
+                        pc.top_tolerance * pc.tolerance * op.dp_ref, en)
     return en
 
 
-@njit(inline="always")
-def _top_error(y, h, km, op, ws, en):
+@njit          # called: a short loop, its cost is the sub-steps it rejects (docs/performance.md)
+def _top_error(y, ynew, f0, f1, beta, n, h, lim, en):
     r"""``en`` raised by the pressure top a sub-step may hide, relative to its allowance.
 
-    Where chamber i's ln ρ rises at the start of the sub-step (slope f₀ = ``ws.f0``) and falls at its
-    predicted end (f₁: the second stage's right-hand side, kept in ``ws.y1``), a top lies inside.
+    Where chamber i's ln ρ (``y`` → ``ynew``) rises at the start of the sub-step (slope ``f0``) and
+    falls at its predicted end (``f1``: the second stage's right-hand side, kept in ``ws.y1``), a top
+    lies inside.
     If the trajectory is concave there, it lies below both end tangents, so above the higher end it
     is at most
 
@@ -273,21 +276,19 @@ def _top_error(y, h, km, op, ws, en):
         m = h f_0 t^* - \max(0, \Delta),\qquad t^* = \frac{\Delta - h f_1}{h (f_0 - f_1)},
 
     Δ = y_{n+1,i} − y_{n,i}: where the tangents cross.  The sub-step is rejected (the returned
-    value > 1) when β_i m exceeds ``top_tolerance`` × ``tolerance`` × (p_d − p_s).  Neither the
+    value > 1) when β_i m exceeds ``lim`` = ``top_tolerance`` × ``tolerance`` × (p_d − p_s) [Pa].  Neither the
     embedded error estimate nor the peak output (:func:`_track_peak`, whose continuous extension is
     convex under such a top) sees it: without this a spike's top between sub-steps was missed by
     up to −2.3 % of the pressure difference (docs/numerics.md).
     """
-    pc = km.pc
-    lim = pc.top_tolerance * pc.tolerance * op.dp_ref
-    for i in range(pc.n):
-        s0 = h * ws.f0[i]
-        s1 = h * ws.y1[i]
+    for i in range(n):
+        s0 = h * f0[i]
+        s1 = h * f1[i]
         if s0 > 0.0 and s1 < 0.0:
-            d = ws.ynew[i] - y[i]
+            d = ynew[i] - y[i]
             ts = (d - s1) / (s0 - s1)
             if 0.0 < ts < 1.0:
-                v = (s0 * ts - max(d, 0.0)) * ws.beta[i] / lim
+                v = (s0 * ts - max(d, 0.0)) * beta[i] / lim
                 if v > en:
                     en = v
     return en
