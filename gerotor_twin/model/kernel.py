@@ -139,16 +139,25 @@ def lu_solve(a, piv, b, x):
 # ------------------------------------------------------------------ stepping
 @njit(inline="always")
 def _error_weights(km, op, ws):
-    """Per-volume weights w with ‖err‖ = max |err_i| w_i ≤ 1 accepted."""
+    """Per-volume weights w with ‖err‖ = max |err_i| w_i ≤ 1 accepted.
+
+    Pressure measure: w_i = β_i / (tol·Δp), at least 1/``log_density_tolerance``.  A chamber whose
+    delivery port closes or has just opened (``J_TCD`` ≠ 0, :func:`.flows.closing_ports`) is held to
+    ``closing_tolerance``·tol and weighed with max(β_i, β(p_d)): an error δ in its ln ρ, made while
+    it is still near suction pressure where β_i is small, becomes a pressure error β(p_d)·δ once the
+    delivery kidney has filled it (a just-opened chamber at 1 bar: β_i ≈ 0.1 GPa against 1.5 GPa).
+    """
     pc = km.pc
     for i in range(pc.n + 1):
         if i == pc.n and not pc.restriction:
             ws.wt[i] = 0.0                                          # the delivered-volume quadrature
         elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
             tol = pc.tolerance
+            beta = ws.beta[i]
             if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
                 tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
-            ws.wt[i] = max(ws.beta[i] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
+                beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
+            ws.wt[i] = max(beta / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
 
