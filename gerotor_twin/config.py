@@ -54,13 +54,13 @@ class Clearances:
 class Orifice:
     """Port orifice law (:mod:`gerotor_twin.hydraulics.orifice`).
 
-    ``law: flow_number`` (default): Cd(λ) = cd_max·tanh(2λ/λ_crit); ``law: merritt``: Merritt's
-    laminar (Cd = δ√Re, ``laminar_delta``) and turbulent (``cd_max``) orifice laws in series
-    (docs/paper.md, "Orifice law").
+    ``law: merritt`` (default): Merritt's laminar (Cd = δ√Re, ``laminar_delta``) and turbulent
+    (``cd_max``) orifice laws in series; ``law: flow_number``: Cd(λ) = cd_max·tanh(2λ/λ_crit), the
+    law the paper's clearances were calibrated with (docs/paper.md, "Orifice law").
     """
     cd_max: float = 0.7
     lambda_crit: float = 1000.0
-    law: str = "flow_number"
+    law: str = "merritt"
     laminar_delta: float = 0.2
 
     def __post_init__(self):

@@ -220,16 +220,21 @@ def test_housing_contact_is_reported_not_clamped_silently(cfg):
 
 
 def test_paper_commands_keep_the_calibrated_ray_kidney(cfg):
-    """Behaviour: the paper's commands run the kidneys the clearances were calibrated with (ray edges),
-    whatever the config says; ``suction_edge="chamber"`` gives the twin's default pump, which fills better
-    at low pressure (fixed centre, 1000 rpm / 5 bar, eq. (23))."""
+    """Behaviour: the paper's commands run the kidneys and the orifice law the clearances were calibrated
+    with (ray edges, flow-number law), whatever the config says; ``suction_edge="chamber"`` gives the
+    twin's default kidney, which fills better at low pressure, and ``orifice_law="merritt"`` its default
+    law, whose larger laminar conductance fills the ray kidney better (fixed centre, 1000 rpm / 5 bar,
+    eq. (23); docs/paper.md, "Orifice law": +0.34 pt)."""
     from dataclasses import replace
     from gerotor_twin.paper.efficiency import efficiency_points
-    ray_cfg = replace(cfg, suction_port=replace(cfg.suction_port, closing_edge="ray"))
+    ray_cfg = replace(cfg, suction_port=replace(cfg.suction_port, closing_edge="ray"),
+                      orifice=replace(cfg.orifice, law="flow_number"))
     kw = dict(models=("fixed",), speeds=(1000.0,), pressures=(5.0,))
     eta = {name: efficiency_points(c, **kw)[0]["volumetric_efficiency"]
            for name, c in (("default", cfg), ("ray", ray_cfg))}
     eta["chamber"] = efficiency_points(cfg, suction_edge="chamber", **kw)[0]["volumetric_efficiency"]
-    assert cfg.suction_port.closing_edge == "chamber"
+    eta["merritt"] = efficiency_points(cfg, orifice_law="merritt", **kw)[0]["volumetric_efficiency"]
+    assert cfg.suction_port.closing_edge == "chamber" and cfg.orifice.law == "merritt"
     assert eta["default"] == eta["ray"]
     assert eta["chamber"] > eta["ray"] + 1e-3, eta
+    assert eta["merritt"] > eta["ray"] + 1e-3, eta

@@ -1,18 +1,21 @@
 """Orifice flow between a chamber and a port: Eq. (21) of [1] with Cd(λ).
 
 Eq. (21) of [1] is the turbulent orifice law with a discharge coefficient that
-"depends on the Reynolds number".  Here Cd follows the flow-number law of the
-AMESim hydraulic library [2] (also MapleSim's Orifice [3]), which goes from
-laminar (Q ∝ Δp) at small flow number to turbulent (Q ∝ √Δp) at large flow
-number.  Its laminar limit removes the infinite slope dQ/dΔp of the pure
-turbulent law at Δp = 0, which is what the stiff implicit integrator needs
-(DESIGN "Numerics": regularize the orifice near Δp = 0 through Cd(Re)).
+"depends on the Reynolds number".  Two such laws are here, both going from laminar
+(Q ∝ Δp) at small Reynolds or flow number to turbulent (Q ∝ √Δp) at large: Merritt's
+laminar and turbulent orifice laws in series [4] (the default), and the flow-number law
+of the AMESim hydraulic library [2] (also MapleSim's Orifice [3]).  The laminar limit
+removes the infinite slope dQ/dΔp of the pure turbulent law at Δp = 0, which is what
+the stiff implicit integrator needs (DESIGN "Numerics": regularize the orifice near
+Δp = 0 through Cd(Re)).
 
 ============================  =================================================
 name                          content
 ============================  =================================================
+:func:`laminar_turbulent_flow` (Q, dQ/dΔp), Merritt's laws in series [4] (default)
 :func:`discharge_coefficient` Cd = Cd_max·tanh(2λ/λ_crit)
 :func:`orifice_flow`          (Q, dQ/dΔp) of Eq. (21) of [1] with Cd(λ)
+:func:`port_orifice_flow`     the configured law, as the kernel calls it
 ============================  =================================================
 
 References
@@ -31,17 +34,18 @@ References
    number Cd = δ√Re, δ ≈ 0.2 from Wuest's data, i.e. the laminar law
    Q = 2δ²D_h A Δp/μ; the two meet at Re_t = (Cd/δ)²).
 
-:func:`laminar_turbulent_flow` (config ``orifice.law: merritt``) puts the two regimes of
-[4] in series, Δp = Q/G_lam + Q²/K_turb², so that Q follows Merritt's laminar law for
+:func:`laminar_turbulent_flow` (config ``orifice.law: merritt``, the default) puts the two
+regimes of [4] in series, Δp = Q/G_lam + Q²/K_turb², so that Q follows Merritt's laminar law for
 Re ≪ Re_t and his turbulent law for Re ≫ Re_t with a smooth, finite dQ/dΔp.
-``orifice.law: flow_number`` (default) is the flow-number law.  What could be checked of
-its sources (issue 13): MapleSim's *Orifice* [3] documents a tanh law in the flow number
-with the parameters Cdmax and Critno (its rendered formula reads as tanh(λ/Critno), without
-the factor 2 used here; the AMESim form 2λ/λ_crit [2] is as recalled, not re-checked), and
-a public HYGESim-style gear-machine code sets λ_crit = 1000, Cq,max = 0.7.  Merritt's law
-is the one with published constants (tests: ``test/test_hydraulics_orifice_merritt.py``);
-it is not the default yet because with it the default numerics exceed the RMS pressure
-budget at 2000 rpm / 27.5 bar (1.05 % against 1 %; docs/paper.md, "Orifice law").
+``orifice.law: flow_number`` is the flow-number law; the paper's commands use it, because the
+clearances of tables 3–5 were calibrated with it (:func:`gerotor_twin.paper.setting.paper_setting`).
+What could be checked of its sources (issue 13): MapleSim's *Orifice* [3] documents a tanh law in
+the flow number with the parameters Cdmax and Critno (its rendered formula reads as tanh(λ/Critno),
+without the factor 2 used here; the AMESim form 2λ/λ_crit [2] is as recalled, not re-checked), and
+a public HYGESim-style gear-machine code sets λ_crit = 1000, Cq,max = 0.7.  Merritt's law is the
+one with published constants (tests: ``test/test_hydraulics_orifice_merritt.py``); it became the
+default once the default numerics kept the error budget with it at every point of the accuracy
+grid (session 13; docs/numerics.md, docs/paper.md "Orifice law").
 """
 from __future__ import annotations
 

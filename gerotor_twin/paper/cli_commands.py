@@ -57,7 +57,7 @@ def cmd_efficiency(args) -> int:
             raise InputError("--models", m, " | ".join(MODELS))
     t0 = time.perf_counter()
     points = efficiency_points(cfg, models=models, progress=_progress, fluid_model=args.fluid_model,
-                               suction_edge=args.suction_edge)
+                               suction_edge=args.suction_edge, orifice_law=args.orifice_law)
     print(f"\r  {len(points)} points in {time.perf_counter() - t0:.1f} s" + " " * 30, file=sys.stderr)
     slopes = row_slopes(points)
     print(f"pump {cfg.source}: tooth-tip clearance {cfg.clearances.tooth_tip_m * 1e6:.2f} µm, "
@@ -169,6 +169,8 @@ def add_parser(sub) -> None:
                    help="oil state equation: paper = eq. (23), as calibrated (default); mixture = oil + air + vapour")
     e.add_argument("--suction-edge", default="ray", choices=("ray", "chamber"),
                    help="suction kidney's closing edge: ray, as calibrated (default); chamber = the twin's default pump")
+    e.add_argument("--orifice-law", default="flow_number", choices=("flow_number", "merritt"),
+                   help="port orifice law: flow_number, as calibrated (default); merritt = the twin's default pump")
     e.add_argument("--config", help="pump YAML (default config/pump.yaml)")
     e.set_defaults(func=cmd_efficiency)
     f = ps.add_parser("figures", help="counterparts of figs. 12–16 (PNG)")

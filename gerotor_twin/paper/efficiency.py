@@ -28,7 +28,8 @@ def with_clearances(cfg: PumpConfig, tooth_tip_m: float, lateral_m: float) -> Pu
 
 def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEEDS_RPM,
                       pressures=PRESSURES_BAR, progress=None, model_cache: dict | None = None,
-                      fluid_model: str = "paper", suction_edge: str = "ray") -> list[dict]:
+                      fluid_model: str = "paper", suction_edge: str = "ray",
+                      orifice_law: str = "flow_number") -> list[dict]:
     """Volumetric efficiency of every (model, speed, pressure) point.
 
     Parameters
@@ -48,6 +49,9 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
     suction_edge : {"ray", "chamber"}
         Closing edge of the suction kidney: the ray, as calibrated (default), or the chamber outline
         of the twin's default pump (:mod:`gerotor_twin.geometry.ports`).
+    orifice_law : {"flow_number", "merritt"}
+        Port orifice law: the flow-number law, as calibrated (default), or Merritt's, the twin's
+        default (:mod:`gerotor_twin.hydraulics.orifice`).
 
     Returns
     -------
@@ -56,7 +60,7 @@ def efficiency_points(cfg: PumpConfig, models=("fixed", "mobility"), speeds=SPEE
         the paper has no value), ``difference`` [-] (model − paper), ``mean_eccentricity_m``,
         ``min_tooth_gap_m``, ``revolutions``, ``counts``.
     """
-    cfg = replace(paper_setting(cfg, fluid_model, suction_edge), boundary=replace(cfg.boundary, mode="imposed"))
+    cfg = replace(paper_setting(cfg, fluid_model, suction_edge, orifice_law), boundary=replace(cfg.boundary, mode="imposed"))
     cache = {} if model_cache is None else model_cache
     total = len(models) * len(speeds) * len(pressures)
     points = []
