@@ -177,7 +177,8 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ);
     for a chamber whose delivery port is closing or has just opened (flagged by ``closing_ports``: time to
     close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.25
-    in the packaged config), elsewhere not."""
+    in the packaged config) and β_i replaced by max(β_i, β(p_d)) (session 13: its ln ρ error counts as it
+    will at delivery pressure), elsewhere not."""
     m, inp, s = warm
     km = m.kernel
     pc = km.pc
@@ -199,10 +200,13 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
             elif tcd > 0:
                 assert a > 0 and slope < 0 and tcd == pytest.approx(a / (-slope * op.omega), rel=1e-12)
             tol = pc.tolerance * (pc.closing_tolerance if closing else 1.0)
-            want = max(ws.beta[j] / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
+            beta = max(ws.beta[j], op.beta_d) if closing else ws.beta[j]
+            want = max(beta / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
             assert ws.wt[j] == pytest.approx(want, rel=1e-12), (theta, j, closing)
-            seen[closing] += ws.beta[j] / (tol * op.dp_ref) > 1.0 / pc.log_density_tolerance
-    assert seen[True] and seen[False] and seen["opened"], seen
+            seen[closing] += beta / (tol * op.dp_ref) > 1.0 / pc.log_density_tolerance
+            if closing and ws.beta[j] < 0.5 * op.beta_d:                 # a just-opened chamber, still soft
+                seen["soft"] = seen.get("soft", 0) + 1
+    assert seen[True] and seen[False] and seen["opened"] and seen["soft"], seen
 
 
 @pytest.fixture(scope="module")
