@@ -74,3 +74,23 @@ def test_contact_check_leaves_one_contact(fixed_model):
         assert np.sum(h < 1e-9) == 1
         exact = exact_gaps(g, 0.7, (ex, ey), gam, with_le=False).h
         assert np.allclose(h, exact, atol=0.3e-6)
+
+
+def test_table_cache_is_keyed_on_the_code_that_builds_it(monkeypatch, tmp_path, fixed_model):
+    """Behaviour: a cached table is read back only by the same geometry code.  The first call writes one
+    file, the second reads it (nothing new); with other geometry sources (the digest replaced) the cached
+    file is not read: a second file is built, equal to the first (same code really ran)."""
+    from gerotor_twin.geometry import tables as T
+    m = fixed_model
+    g, cfg = m.geometry, m.config
+    monkeypatch.setenv("GEROTOR_TWIN_CACHE", str(tmp_path))
+    size = 256                                       # small: two builds in well under a second each
+    first = T.cached_tables(g, cfg.suction_port, cfg.delivery_port, size)
+    files = sorted(tmp_path.glob("tables_*.npz"))
+    assert len(files) == 1
+    again = T.cached_tables(g, cfg.suction_port, cfg.delivery_port, size)
+    assert sorted(tmp_path.glob("tables_*.npz")) == files and np.array_equal(again.data, first.data)
+    monkeypatch.setattr(T, "geometry_source_digest", lambda: "other code")
+    other = T.cached_tables(g, cfg.suction_port, cfg.delivery_port, size)
+    assert len(list(tmp_path.glob("tables_*.npz"))) == 2
+    assert np.array_equal(other.data, first.data)

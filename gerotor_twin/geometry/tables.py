@@ -26,6 +26,7 @@ exact root-finding definition in the tests.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -203,11 +204,28 @@ def _cache_dir() -> Path:
     return Path(base)
 
 
+@functools.lru_cache(maxsize=1)
+def geometry_source_digest() -> str:
+    """SHA-256 of the geometry package's sources (every ``*.py`` beside this module).
+
+    Part of the cache key of :func:`cached_tables`: a table built by other code (an older release, a
+    work in progress) is never read back, whether or not :data:`TABLE_VERSION` was raised.  (A
+    prototype's table, cached under the same inputs, once fed a day of runs on the dev machine.)
+    """
+    h = hashlib.sha256()
+    here = Path(__file__).resolve().parent
+    for f in sorted(here.glob("*.py")):
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
 def cached_tables(g: GerotorGeometry, suction: Port, delivery: Port, size: int = 2048,
                   progress=None) -> GeometryTables:
-    """:func:`build_tables`, memoised on disk by a hash of the inputs."""
+    """:func:`build_tables`, memoised on disk by a hash of the inputs and of the code that builds them
+    (:func:`geometry_source_digest`)."""
     key = json.dumps({"g": asdict(g), "s": asdict(suction), "d": asdict(delivery), "n": size,
-                      "v": TABLE_VERSION}, sort_keys=True)
+                      "v": TABLE_VERSION, "src": geometry_source_digest()}, sort_keys=True)
     digest = hashlib.sha256(key.encode()).hexdigest()[:20]
     path = _cache_dir() / f"tables_{digest}.npz"
     if path.exists():
