@@ -22,6 +22,11 @@ def eta_true(t):
     return np.where(t < 6.0, 0.95, 0.93)
 
 
+def oil_c(t):
+    """Oil temperature of the synthetic bench [°C]: warming linearly, 30 °C + 2 K/s."""
+    return 30.0 + 2.0 * t
+
+
 def write_bench(path, duration=12.0, *, skip=(), types=None, rate=50.0):
     """Bench topics at ``rate`` Hz; ``skip`` leaves topics out, ``types`` overrides a topic's type."""
     types = {"/bench/shaft_speed": m.JOINT_STATE, "/bench/delivery_pressure": m.FLUID_PRESSURE,
@@ -42,6 +47,8 @@ def write_bench(path, duration=12.0, *, skip=(), types=None, rate=50.0):
                     msg = m.joint_state(ns, name=["s"], velocity=[w[k]])
                 elif ty == m.FLUID_PRESSURE:
                     msg = m.fluid_pressure(ns, p[k])
+                elif ty == m.TEMPERATURE:
+                    msg = m.temperature(ns, oil_c(tk))
                 else:
                     msg = m.float64(q[k])
                 log.write(topic, msg, ns)

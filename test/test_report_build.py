@@ -15,7 +15,8 @@ from gerotor_twin.report.analysis import Plateau
 from gerotor_twin.report.build import build_report
 from gerotor_twin.report.data import load_twin
 from gerotor_twin.report.figures import gap_profile
-from report_helpers import T0, write_bench, write_twin
+from gerotor_twin.io import messages as m
+from report_helpers import T0, oil_c, write_bench, write_twin
 
 FIG_IDS = ("fig-verdict", "fig-eta-map", "fig-waveform", "fig-trajectory", "fig-gaps")
 TS_IDS = ("ts-speed", "ts-pressure", "ts-flow", "ts-residual", "ts-efficiency")
@@ -69,6 +70,24 @@ def test_missing_optional_topic_drops_only_its_figure(tmp_path):
     page = (tmp_path / "r.html").read_text()
     assert res["figures_drawn"] == len(FIG_IDS) - 1 and 'id="fig-waveform-missing"' in page
     assert "/twin/chamber_waveform" in page
+
+
+def test_oil_temperature_beside_speed_and_pressure(tmp_path):
+    """Behaviour (issue 13): with ``/bench/oil_temperature`` in the bench bag the report has the oil panel
+    and every plateau row its mean oil temperature; the bench warms linearly (30 °C + 2 K/s), so a
+    plateau's mean is the closed form 30 + (t0 + t1) °C.  Without the topic the panel is absent."""
+    b = write_bench(tmp_path / "b.mcap", types={"/bench/oil_temperature": m.TEMPERATURE})
+    t = write_twin(tmp_path / "t.mcap")
+    res = build_report(b, [t], tmp_path / "r.html", json_path=tmp_path / "m.json")
+    page = (tmp_path / "r.html").read_text()
+    assert '<div class="ts-panel" id="ts-oil-temperature"></div>' in page and "oil [°C]" in page
+    rows = json.loads((tmp_path / "m.json").read_text())["twins"][0]["plateaus"]
+    assert rows
+    for r in rows:
+        assert r["oil_temperature_c"] == pytest.approx(0.5 * (oil_c(r["t0_s"]) + oil_c(r["t1_s"])), abs=0.05), r
+    b0 = write_bench(tmp_path / "b0.mcap")
+    build_report(b0, [t], tmp_path / "r0.html")
+    assert 'id="ts-oil-temperature"' not in (tmp_path / "r0.html").read_text()
 
 
 def test_gap_profile_is_physical(tmp_path):
