@@ -185,6 +185,8 @@ def cmd_bench(args) -> int:
     from .config import load_config
     from .model.bench import realtime
 
+    if args.family is not None and args.what in ("realtime", "accuracy"):
+        return _bench_family(args)
     cfg = load_config(args.config)
     if args.what == "realtime":
         speeds = tuple(int(round(v)) for v in _floats(args.rpm or "1000,2000,3000", "--rpm"))
@@ -198,7 +200,8 @@ def cmd_bench(args) -> int:
     elif args.what == "accuracy":
         from .model.accuracy import print_accuracy
         rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
-                              models=tuple((args.models or "mobility").split(",")))
+                              models=tuple((args.models or "mobility").split(",")),
+                              check_reference=args.check_reference)
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
         return 0 if all(r["within_budget"] for r in rows) else 1
@@ -209,6 +212,35 @@ def cmd_bench(args) -> int:
         if args.json:
             _write_json(args.json, {"models": rows})
     return 0
+
+
+def _bench_family(args) -> int:
+    """``bench accuracy|realtime --family [DIR]``: every pump of the family on its own grid (model/family.py)."""
+    from .model.family import family_grid, family_pumps, pressure_extremes, speed_extremes
+    pumps = family_pumps(args.family or None, args.pumps)
+    models = tuple((args.models or "mobility").split(","))
+    out, ok = {}, True
+    for pump in pumps:
+        cfg = pump.config
+        if args.what == "accuracy":
+            from .model.accuracy import print_accuracy
+            rpms, bars = family_grid(cfg)
+            rows = print_accuracy(cfg, rpms=rpms, bars=bars, models=models, check_reference=args.check_reference,
+                                  label=f"{pump.name} ({pump.path})")
+            ok &= all(r["within_budget"] for r in rows)
+            print(f"{pump.name}: {sum(r['within_budget'] for r in rows)} of {len(rows)} points within budget",
+                  flush=True)
+        else:
+            from .model.bench import realtime
+            rows = []
+            for bar in pressure_extremes(cfg):
+                print(f"{pump.name} ({pump.path}):", flush=True)
+                rows += realtime(cfg, models=models, speeds=(int(round(speed_extremes(cfg)[1])),), bar=bar,
+                                 seconds=args.seconds, repeats=args.repeats)
+        out[pump.name] = {"config": str(pump.path), "points": rows}
+    if args.json:
+        _write_json(args.json, {"family": out})
+    return 0 if ok else 1
 
 
 # ------------------------------------------------------------------- parser
@@ -274,6 +306,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")
     b.add_argument("--repeats", type=int, default=3)
     b.add_argument("--config", help="pump YAML")
+    b.add_argument("--family", nargs="?", const="", default=None, metavar="DIR",
+                   help="accuracy / realtime: every pump YAML of DIR (default config/pumps/) on its own range "
+                        "(accuracy: speeds low/mid/top x pressures low/top; realtime: top speed at both pressures)")
+    b.add_argument("--pumps", help="with --family: comma-separated pump names (file stems) to run")
+    b.add_argument("--check-reference", action="store_true",
+                   help="accuracy: also show how far the reference moves against one with half its tolerance and "
+                        "twice its output-step refinement (largest budget figure, as a fraction of its budget)")
     b.add_argument("--json", help="write the figures to this JSON file")
     b.set_defaults(func=cmd_bench)
 

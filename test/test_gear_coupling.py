@@ -176,9 +176,10 @@ def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(cfg, r
         ref = reference_revolution(c, rpm, bar, "mobility")
         res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
         err[scheme] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)
-    assert err["partitioned"]["peak_pressure_error"] > BUDGET["peak_pressure_error"], err
-    assert abs(err["stages"]["peak_pressure_error"]) <= 0.5 * BUDGET["peak_pressure_error"], err
-    assert max(e["rms_pressure_error"] for e in err.values()) <= 0.5 * BUDGET["rms_pressure_error"], err
+    assert err["partitioned"]["peak_pressure_error"] > BUDGET["peak_pressure_error_gauge"], err
+    assert abs(err["stages"]["peak_pressure_error"]) <= 0.5 * BUDGET["peak_pressure_error_gauge"], err
+    # half of 1 % of p_d − p_s: tighter than the budget (1 % of the waveform's range, never below p_d − p_s)
+    assert max(e["rms_pressure_error"] for e in err.values()) <= 0.5 * BUDGET["rms_pressure_error_of_range"], err
 
 
 def test_gear_coupling_is_validated(cfg):

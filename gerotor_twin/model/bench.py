@@ -16,12 +16,14 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
              repeats=3, out=print) -> list[dict]:
     """Model-only real-time factor: simulated time / wall time, one core, after warm-up.
 
-    Medians of ``repeats`` runs of ``seconds`` simulated at each speed and ``bar``.
+    Medians of ``repeats`` runs of ``seconds`` simulated at each speed and ``bar``.  µs/sub-step: wall time
+    of the last run per ROS2 sub-step attempted in it (accepted and rejected).
     """
     rows = []
     out(f"real-time factor of the pump model ({bar:g} bar, {seconds:g} s simulated, median of {repeats}; "
         f"RTF = simulated / wall time, CPU RTF = simulated / CPU time of this process)")
-    out(f"  {'model':9s} {'rpm':>5s} {'wall [s]':>9s} {'RTF':>6s} {'CPU RTF':>8s} {'sub-steps/rev':>14s}")
+    out(f"  {'model':9s} {'rpm':>5s} {'bar':>5s} {'wall [s]':>9s} {'RTF':>6s} {'CPU RTF':>8s} {'sub-steps/rev':>14s} "
+        f"{'µs/sub-step':>12s}")
     for name in models:
         m = PumpModel(config, name)
         for rpm in speeds:
@@ -30,16 +32,20 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
             s, _ = m.advance(m.initial_state(inp), 0.1, inp)     # warm-up (JIT, transient)
             walls, cpus = [], []
             for _ in range(repeats):
-                c0 = s.counts["substeps"]
+                c0, r0 = s.counts["substeps"], s.counts["rejected_substeps"]
                 t0, p0 = time.perf_counter(), time.process_time()
                 s, _ = m.advance(s, seconds, inp)
                 walls.append(time.perf_counter() - t0)
                 cpus.append(time.process_time() - p0)
             wall, cpu = statistics.median(walls), statistics.median(cpus)
+            n_sub = s.counts["substeps"] - c0 + s.counts["rejected_substeps"] - r0
             sub = (s.counts["substeps"] - c0) / (seconds * rpm / 60)
-            rows.append({"model": name, "rpm": rpm, "wall_s": wall, "real_time_factor": seconds / wall,
-                         "cpu_real_time_factor": seconds / cpu, "substeps_per_revolution": sub})
-            out(f"  {name:9s} {rpm:5d} {wall:9.3f} {seconds / wall:6.2f} {seconds / cpu:8.2f} {sub:14.0f}")
+            us = 1e6 * walls[-1] / max(n_sub, 1)
+            rows.append({"model": name, "rpm": rpm, "bar": bar, "wall_s": wall, "real_time_factor": seconds / wall,
+                         "cpu_real_time_factor": seconds / cpu, "substeps_per_revolution": sub,
+                         "us_per_substep": us})
+            out(f"  {name:9s} {rpm:5d} {bar:5.1f} {wall:9.3f} {seconds / wall:6.2f} {seconds / cpu:8.2f} {sub:14.0f} "
+                f"{us:12.2f}")
     return rows
 
 

@@ -44,11 +44,11 @@ import math
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
-from .contact import column, locate
+from .contact import column, gap_at, locate
 from .loads import journal_torque
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
-           "linearise_with", "set_velocity", "close_pending", "gear_move"]
+           "linearise_with", "set_velocity", "close_pending", "gear_move", "hold_contact"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -268,3 +268,62 @@ def gear_move(ex, ey, theta, km, pres, gc, rows):
     gc[GC_VX], gc[GC_VY] = gear_velocity(fx, fy, gc)
     close_pending(gc)
     return ex + gc[GC_DEX], ey + gc[GC_DEY], fx, fy
+
+
+@njit(inline="always")
+def hold_contact(gc, tab, n, delta, ex, ey, theta, dth, h):
+    r"""Keep the linearised velocity of the output step on the tooth contact it would run into.
+
+    The overlap check of sec. 3.7 of [1] pulls the outer gear back along :math:`\hat{\mathbf e}` when
+    its displacement would make a gap h_k (inner gear unturned) negative.  If the free velocity
+    :math:`\dot{\mathbf e}_0` of the step would close a gap within the step,
+    :math:`h_k + \Delta t\,(\nabla h_k\cdot\dot{\mathbf e}_0 + \partial h_k/\partial t) < 0`
+    (Δt = h the output step), the gear rides on that lobe: it moves with the velocity whose component
+    along :math:`\hat{\mathbf e}` brings the gap to zero at the step's end, the check's own direction,
+
+    .. math::
+        \dot{\mathbf e}_c = \dot{\mathbf e} - \lambda\,\hat{\mathbf e},\qquad
+        \lambda = \frac{\nabla h_k\cdot\dot{\mathbf e} + \partial h_k/\partial t + h_k/\Delta t}
+                        {\nabla h_k\cdot\hat{\mathbf e}}.
+
+    λ is linear in the load, so ė₀ and G of the step (:func:`set_velocity`) become
+    :math:`P\dot{\mathbf e}_0 - \hat{\mathbf e}\,(h_t + h_k/\Delta t)/(\nabla h\cdot\hat{\mathbf e})` and
+    :math:`PG`, :math:`P = I - \hat{\mathbf e}\,\nabla h^T/(\nabla h\cdot\hat{\mathbf e})`, held over the
+    step like the contact of Eq. (26).  The lobe is the one whose gap the free velocity closes
+    deepest.  Without this the stages squeeze the chambers with the free velocity and the check takes
+    the overlap back after the step: a one-step lag of the squeeze at every step where the gear rides
+    on the teeth (every step, with tight tooth-tip clearances).  Gaps from the expansion of
+    :mod:`.contact` at γ = 0; ∂h/∂t from the gap at θ + ``dth`` [rad] at the same position; h [s].
+    """
+    en = math.hypot(ex, ey)
+    if en <= 0.0 or h <= 0.0:
+        return
+    ux = ex / en
+    uy = ey / en
+    worst = 0.0
+    lam = 0.0
+    gxk = 0.0
+    gyk = 0.0
+    guk = 0.0
+    for k in range(n):
+        g0, gx, gy = gap_at(tab, theta, k, delta, ex, ey)
+        g1, _gx1, _gy1 = gap_at(tab, theta + dth, k, delta, ex, ey)
+        gu = gx * ux + gy * uy
+        rate = gx * gc[GC_V0X] + gy * gc[GC_V0Y] + (g1 - g0) / h
+        end = g0 + h * rate                                 # the gap at the step's end, free gear
+        if end < worst and gu < 0.0:
+            worst = end
+            lam = (rate + g0 / h) / gu
+            gxk, gyk, guk = gx, gy, gu
+    if lam <= 0.0:
+        return                                              # no gap closes: free
+    gc[GC_V0X] -= lam * ux
+    gc[GC_V0Y] -= lam * uy
+    gc[GC_VX], gc[GC_VY] = gc[GC_V0X], gc[GC_V0Y]
+    gc[GC_VPX], gc[GC_VPY] = gc[GC_V0X], gc[GC_V0Y]
+    ax = (gxk * gc[GC_GXX] + gyk * gc[GC_GYX]) / guk      # ∇hᵀG / (∇h·ê)
+    ay = (gxk * gc[GC_GXY] + gyk * gc[GC_GYY]) / guk
+    gc[GC_GXX] -= ux * ax
+    gc[GC_GXY] -= ux * ay
+    gc[GC_GYX] -= uy * ax
+    gc[GC_GYY] -= uy * ay
