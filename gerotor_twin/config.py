@@ -13,7 +13,7 @@ from typing import Any
 
 from .errors import InputError, check_range
 from .geometry.gerotor import GerotorGeometry
-from .geometry.ports import Port
+from .geometry.ports import FACES_MAX, NOTCH_SHAPES, Notch, Port, geometry_port_angles, sealing_lands
 from .config_oil import (DEFAULT_REFERENCE_TEMPERATURE_K, OIL_SET_FLUID_KEYS, fluid_at, fluid_with_oil,
                          oil_to_dict, parse_air, parse_fluid_model, parse_oil)
 from .hydraulics.fluid import Fluid
@@ -96,13 +96,20 @@ class Boundary:
 
 @dataclass(frozen=True)
 class OperatingRange:
-    """Documented operating envelope: speed [rpm] and delivery gauge pressure [bar]."""
+    """Documented operating envelope: speed [rpm] and delivery gauge pressure [bar].
+
+    ``max_speed_rpm`` bounds the speeds the model accepts; ``min_speed_rpm`` (default 0) is the lowest
+    speed the maker rates the pump for, documentation and a default for studies: the model still
+    runs below it (a pump starts from rest).
+    """
     max_speed_rpm: float = 3000.0
     max_delivery_bar: float = 27.5
+    min_speed_rpm: float = 0.0
 
     def __post_init__(self):
         check_range("range.max_speed_rpm", self.max_speed_rpm, 0.0, 20000.0, lo_open=True, unit="rpm")
         check_range("range.max_delivery_bar", self.max_delivery_bar, 0.0, 400.0, lo_open=True, unit="bar")
+        check_range("range.min_speed_rpm", self.min_speed_rpm, 0.0, self.max_speed_rpm, hi_open=True, unit="rpm")
 
 
 ERROR_MEASURES = ("pressure", "log_density")
@@ -234,9 +241,7 @@ class PumpConfig:
                       "outer_root_radius_m": g.outer_root_radius, "outer_radius_m": g.outer_radius,
                       "inner_hole_radius_m": g.inner_hole_radius, "width_m": g.width},
             "clearances": _asdict(self.clearances),
-            "ports": {p.name: {"start_deg": math.degrees(p.start), "end_deg": math.degrees(p.end),
-                               "closing_edge": p.closing_edge}
-                      for p in (self.suction_port, self.delivery_port)},
+            "ports": {p.name: _port_dict(p) for p in (self.suction_port, self.delivery_port)},
             "fluid": _fluid_dict(self),
             **_oil_dict(self),
             "orifice": _asdict(self.orifice),
@@ -247,6 +252,17 @@ class PumpConfig:
             "micro_motion": _asdict(self.micro_motion),
             **({"calibration": self.calibration} if self.calibration is not None else {}),
         }
+
+
+def _port_dict(p: Port) -> dict:
+    """One port in the explicit form (resolved angles, grooves with their resolved radius)."""
+    d = {"start_deg": math.degrees(p.start), "end_deg": math.degrees(p.end), "closing_edge": p.closing_edge}
+    for key in ("opening_notch", "closing_notch"):
+        n = getattr(p, key)
+        if n is not None:
+            d[key] = {"length_deg": math.degrees(n.length), "width_m": n.width, "depth_m": n.depth,
+                      "shape": n.shape, "radius_m": n.radius}
+    return d
 
 
 def _asdict(obj) -> dict:
@@ -330,16 +346,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
         width=_num(gs, "gears", "width_m"),
         tip_clearance=clear.tooth_tip_m,
     )
-    ps = _section(raw, "ports", {"suction", "delivery"})
-    ports = {}
-    for name in ("suction", "delivery"):
-        p = _section(ps, name, {"start_deg", "end_deg", "closing_edge"}) if name in ps else None
-        if p is None:
-            raise InputError(f"ports.{name}", None, "a mapping with start_deg, end_deg", "missing key")
-        a0 = _num(p, f"ports.{name}", "start_deg")
-        a1 = _num(p, f"ports.{name}", "end_deg")
-        check_range(f"ports.{name}.start_deg", a0, 0.0, 360.0, hi_open=True, unit="deg")
-        ports[name] = Port(name, math.radians(a0), math.radians(a1), str(p.get("closing_edge", "ray")))
+    ports = _ports(raw, gears)
     fluid, oil, t_ref = _fluid_and_oil(raw)
     ok = {"cd_max", "lambda_crit", "law", "laminar_delta"}
     osec = _section(raw, "orifice", ok, False)
@@ -350,13 +357,12 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     bs = _section(raw, "boundary", bk, False)
     boundary = Boundary(mode=bs.get("mode", "imposed"),
                         **{k: _num(bs, "boundary", k) for k in bk - {"mode"} if k in bs})
-    rs = _section(raw, "range", {"max_speed_rpm", "max_delivery_bar"}, False)
+    rs = _section(raw, "range", {"max_speed_rpm", "max_delivery_bar", "min_speed_rpm"}, False)
     rng = OperatingRange(**{k: _num(rs, "range", k) for k in rs})
     ns = _section(raw, "numerics", {f.name for f in fields(Numerics)}, False)
     num = Numerics(**{k: (str(ns[k]) if k in ("error_measure", "gear_coupling") else
                           int(_num(ns, "numerics", k)) if k == "table_points" else
                           _num(ns, "numerics", k)) for k in ns})
-    _check_ports(ports["suction"], ports["delivery"])
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,
                       boundary=boundary, range=rng, numerics=num, source=source, oil=oil,
@@ -390,14 +396,94 @@ def _calibration_block(sec) -> dict | None:
     return sec
 
 
+PORT_TIMINGS = ("degrees", "geometry")
+_NOTCH_KEYS = {"length_deg", "width_m", "depth_m", "shape", "radius_m"}
+
+
+def _ports(raw: dict, gears: GerotorGeometry) -> dict[str, Port]:
+    """The ``ports`` section: kidneys in degrees (``timing: degrees``, the form without the key) or from
+    the gear set (``timing: geometry``, :func:`~gerotor_twin.geometry.ports.geometry_port_angles`),
+    each with an optional ``closing_edge`` and relief grooves ``opening_notch`` / ``closing_notch``."""
+    ps = _section(raw, "ports", {"suction", "delivery", "timing"})
+    timing = ps.get("timing", "degrees")
+    if timing not in PORT_TIMINGS:
+        raise InputError("ports.timing", timing, " | ".join(PORT_TIMINGS))
+    explicit = timing == "degrees"
+    keys = {"closing_edge", "opening_notch", "closing_notch"} | ({"start_deg", "end_deg"} if explicit else set())
+    secs, notches = {}, {}
+    for name in ("suction", "delivery"):
+        if name not in ps:
+            raise InputError(f"ports.{name}", None, "a mapping with start_deg, end_deg" if explicit else
+                             "a mapping (may be empty: {})", "missing key")
+        p = ps[name] if ps[name] is not None or explicit else {}
+        if not explicit and isinstance(p, dict) and ({"start_deg", "end_deg"} & set(p)):
+            k = sorted({"start_deg", "end_deg"} & set(p))[0]
+            raise InputError(f"ports.{name}.{k}", p[k], "no angle with ports.timing: geometry",
+                             "the kidney edges come from the gear set; remove the angle or set timing: degrees")
+        secs[name] = _section({f"ports.{name}": p}, f"ports.{name}", keys)
+        for edge in ("opening", "closing"):
+            if secs[name].get(f"{edge}_notch") is not None:
+                notches[(name, edge)] = _notch(secs[name][f"{edge}_notch"], f"ports.{name}.{edge}_notch",
+                                               gears, name, edge)
+    if explicit:
+        angles = {}
+        for name in ("suction", "delivery"):
+            a0 = _num(secs[name], f"ports.{name}", "start_deg")
+            a1 = _num(secs[name], f"ports.{name}", "end_deg")
+            check_range(f"ports.{name}.start_deg", a0, 0.0, 360.0, hi_open=True, unit="deg")
+            angles[name] = (math.radians(a0), math.radians(a1))
+    else:
+        angles = geometry_port_angles(gears, notches)
+    ports = {name: Port(name, *angles[name], str(secs[name].get("closing_edge", "ray")),
+                        notches.get((name, "opening")), notches.get((name, "closing")))
+             for name in ("suction", "delivery")}
+    _check_ports(ports["suction"], ports["delivery"])
+    return ports
+
+
+def _notch(sec, field: str, gears: GerotorGeometry, port: str, edge: str) -> Notch:
+    """One relief groove mapping: length_deg, width_m, depth_m, shape (tapered), radius_m (auto)."""
+    if not isinstance(sec, dict):
+        raise InputError(field, sec, f"a mapping with keys {sorted(_NOTCH_KEYS)}")
+    unknown = set(sec) - _NOTCH_KEYS
+    if unknown:
+        k = sorted(unknown)[0]
+        raise InputError(f"{field}.{k}", sec[k], f"one of the keys {sorted(_NOTCH_KEYS)}", "unknown key")
+    length = check_range(f"{field}.length_deg", _num(sec, field, "length_deg"), 0.0, 30.0, lo_open=True,
+                         unit="deg")
+    width = check_range(f"{field}.width_m", _num(sec, field, "width_m"), 0.0, 0.02, lo_open=True, unit="m")
+    depth = check_range(f"{field}.depth_m", _num(sec, field, "depth_m"), 0.0, 0.01, lo_open=True, unit="m")
+    shape = sec.get("shape", "tapered")
+    if shape not in NOTCH_SHAPES:
+        raise InputError(f"{field}.shape", shape, " | ".join(NOTCH_SHAPES))
+    r_lo = gears.inner_root_radius
+    r_hi = gears.outer_root_radius + gears.eccentricity
+    if sec.get("radius_m", "auto") == "auto":
+        lands = sealing_lands(gears)
+        radius = lands.max_radius if FACES_MAX[(port, edge)] else lands.min_radius
+    else:
+        radius = check_range(f"{field}.radius_m", _num(sec, field, "radius_m"), r_lo, r_hi, unit="m")
+    if width >= r_hi - r_lo:
+        raise InputError(f"{field}.width_m", width, f"(0, {r_hi - r_lo:g}) m", "wider than the chamber band")
+    return Notch(length=math.radians(length), width=width, depth=depth, radius=radius, shape=shape)
+
+
 def _check_ports(s: Port, d: Port) -> None:
-    """Ports must not overlap: delivery on the upper half, suction on the lower half."""
+    """Ports must not overlap: delivery on the upper half, suction on the lower half (relief grooves
+    included)."""
     if not (0 < d.start < d.end < math.pi):
         raise InputError("ports.delivery.start_deg", math.degrees(d.start), "0 < start < end < 180 deg",
                          "the delivery kidney lies where chambers shrink (upper half)")
     if not (math.pi < s.start < s.end < 2 * math.pi):
         raise InputError("ports.suction.start_deg", math.degrees(s.start), "180 < start < end < 360 deg",
                          "the suction kidney lies where chambers grow (lower half)")
+    for p, lo, hi in ((d, 0.0, math.pi), (s, math.pi, 2 * math.pi)):
+        for key, tip in (("opening_notch", p.start - (p.opening_notch.length if p.opening_notch else 0.0)),
+                         ("closing_notch", p.end + (p.closing_notch.length if p.closing_notch else 0.0))):
+            if getattr(p, key) is not None and not lo < tip < hi:
+                raise InputError(f"ports.{p.name}.{key}.length_deg", math.degrees(getattr(p, key).length),
+                                 f"a groove tip inside ({math.degrees(lo):g}, {math.degrees(hi):g}) deg",
+                                 f"the tip would be at {math.degrees(tip):.2f} deg, past the dead centre")
 
 
 def load_config(path: str | Path | None = None) -> PumpConfig:
