@@ -94,14 +94,15 @@ def _imports(package: Path, f: Path) -> set[Path]:
     return out
 
 
-def kernel_sources(package: Path = _PACKAGE) -> list[Path]:
+def kernel_sources(package: Path | None = None) -> list[Path]:
     """The source files the compiled code can depend on, sorted.
 
     The modules of ``package`` that import ``_jit`` (they define the compiled
     functions), this module, and every module of the package they import,
     transitively.  Read from the import statements (:mod:`ast`); nothing is
-    imported.
+    imported.  ``package``: the package directory (default: this one).
     """
+    package = Path(package) if package is not None else _PACKAGE
     jit = package / "_jit.py"
     files = sorted(package.rglob("*.py"))
     graph = {f: _imports(package, f) for f in files if b"_jit" in f.read_bytes()}   # only these can import it
@@ -117,8 +118,9 @@ def kernel_sources(package: Path = _PACKAGE) -> list[Path]:
     return sorted(seen)
 
 
-def source_digest(package: Path = _PACKAGE) -> str:
+def source_digest(package: Path | None = None) -> str:
     """SHA-256 of the kernel sources (:func:`kernel_sources`): their paths and contents."""
+    package = Path(package) if package is not None else _PACKAGE
     h = hashlib.sha256()
     for f in kernel_sources(package):
         h.update(f.relative_to(package).as_posix().encode())
@@ -171,7 +173,7 @@ def invalidate_stale_cache() -> bool:
     file changed); the cache is deleted when the latter differs.  Returns True if
     the cache was reset.  Silent where the cache is not writable.
     """
-    root = _numba_cache_dir(Path(__file__).resolve())
+    root = _numba_cache_dir(_PACKAGE / "_jit.py")
     if root is None:
         return False
     package = _package_digest()

@@ -212,6 +212,7 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
     """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction)."""
+    omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # one compiled specialisation (_jit.typed)
     dp_ref = max(p_d - p_s, 1e5)
     s_d = log_density_of(p_d, km.eos)
     return typed(Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
