@@ -334,24 +334,6 @@ def test_pure_python_path_equals_the_compiled_one():
         assert a["eta"] == pytest.approx(b["eta"], rel=1e-9)
 
 
-def test_a_changed_source_invalidates_the_numba_cache(tmp_path, monkeypatch):
-    """Behaviour: cache files of the package are deleted once when the sources' hash changes."""
-    from gerotor_twin import _jit
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    cached = tmp_path / "work" / "gerotor_twin" / "model" / "kernel.integrate-1.py311.nbi"
-    other = tmp_path / "work" / "other_project" / "f-1.py311.nbi"
-    for f in (cached, other):
-        f.parent.mkdir(parents=True)
-        f.write_text("x")
-    (tmp_path / _jit._STAMP).write_text("an older hash")
-    assert _jit.invalidate_stale_cache()
-    assert not cached.exists() and other.exists()           # only this package's files
-    cached.write_text("x")
-    assert not _jit.invalidate_stale_cache()                # same sources: kept
-    assert cached.exists()
-
-
-
 def _ros2_peak(y0, h, f, jac, f_t, start=None):
     """kernel._track_peak after one ROS2 step of a scalar ODE y' = f(t, y) with ∂f/∂y = jac, ∂f/∂t = f_t
     constant (linear); the stages are those of kernel.ros2_step, written out for one variable.

@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._jit import typed
 from ..config import PumpConfig
 from ..geometry.lateral import LateralGeometry
 from ..geometry.tables import GeometryTables
@@ -191,7 +192,7 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         top_tolerance=n.top_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta,
         gear_in_stages=n.gear_coupling == "stages")
-    return KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air))
+    return typed(KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air)))
 
 
 def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry,
@@ -206,16 +207,17 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
     g_lat, g_sd, g_dr = _conductances(config, lateral, f.viscosity_pa_s)
     pc = km.pc._replace(density=f.density_kg_m3, viscosity=f.viscosity_pa_s, g_lateral=g_lat,
                         g_suction_delivery=g_sd, g_drain=g_dr)
-    return KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air))
+    return typed(KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air)))
 
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
     """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction)."""
+    omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # one compiled specialisation (_jit.typed)
     dp_ref = max(p_d - p_s, 1e5)
     s_d = log_density_of(p_d, km.eos)
-    return Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
-                     s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d),
-                     rate_dp=float(rate_fraction) * dp_ref)
+    return typed(Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
+                           s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d),
+                           rate_dp=float(rate_fraction) * dp_ref))
 
 
 def workspace(n: int) -> Workspace:
