@@ -96,13 +96,27 @@ class Boundary:
 
 @dataclass(frozen=True)
 class OperatingRange:
-    """Documented operating envelope: speed [rpm] and delivery gauge pressure [bar]."""
+    """Documented operating envelope: speed [rpm] and delivery gauge pressure [bar].
+
+    ``min_speed_rpm`` (optional) is the lowest rated speed: the bench emulator's built-in
+    profiles start there instead of at a third of ``max_speed_rpm``
+    (:mod:`gerotor_twin.bench_emulator.profiles`); the model and the twin still accept 0.
+    """
     max_speed_rpm: float = 3000.0
     max_delivery_bar: float = 27.5
+    min_speed_rpm: float | None = None
 
     def __post_init__(self):
         check_range("range.max_speed_rpm", self.max_speed_rpm, 0.0, 20000.0, lo_open=True, unit="rpm")
         check_range("range.max_delivery_bar", self.max_delivery_bar, 0.0, 400.0, lo_open=True, unit="bar")
+        if self.min_speed_rpm is not None:
+            check_range("range.min_speed_rpm", self.min_speed_rpm, 0.0, self.max_speed_rpm, hi_open=True,
+                        unit="rpm (below range.max_speed_rpm)")
+
+    def to_dict(self) -> dict:
+        """The ``range`` section (``min_speed_rpm`` only when set)."""
+        out = {"max_speed_rpm": self.max_speed_rpm, "max_delivery_bar": self.max_delivery_bar}
+        return out if self.min_speed_rpm is None else {**out, "min_speed_rpm": self.min_speed_rpm}
 
 
 ERROR_MEASURES = ("pressure", "log_density")
@@ -242,7 +256,7 @@ class PumpConfig:
             "orifice": _asdict(self.orifice),
             "leakage": {"tip_dh": self.tip_dh},
             "boundary": _asdict(self.boundary),
-            "range": _asdict(self.range),
+            "range": self.range.to_dict(),
             "numerics": _asdict(self.numerics),
             "micro_motion": _asdict(self.micro_motion),
             **({"calibration": self.calibration} if self.calibration is not None else {}),
@@ -350,7 +364,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     bs = _section(raw, "boundary", bk, False)
     boundary = Boundary(mode=bs.get("mode", "imposed"),
                         **{k: _num(bs, "boundary", k) for k in bk - {"mode"} if k in bs})
-    rs = _section(raw, "range", {"max_speed_rpm", "max_delivery_bar"}, False)
+    rs = _section(raw, "range", {"max_speed_rpm", "max_delivery_bar", "min_speed_rpm"}, False)
     rng = OperatingRange(**{k: _num(rs, "range", k) for k in rs})
     ns = _section(raw, "numerics", {f.name for f in fields(Numerics)}, False)
     num = Numerics(**{k: (str(ns[k]) if k in ("error_measure", "gear_coupling") else
