@@ -171,6 +171,9 @@ def test_example_profile_file_loads():
     load_profile_file(path, OperatingRange(7000.0, 27.5))
     with pytest.raises(InputError, match=r"example\.yaml: segments\[2\]\.rpm = 2500"):
         load_profile_file(path, OperatingRange(2000.0, 27.5))
+    doc = (ROOT / "docs" / "offline.md").read_text()
+    block = doc.split("[`config/profiles/example.yaml`]", 1)[1].split("```yaml\n", 1)[1].split("```", 1)[0]
+    assert yaml.safe_load(block) == yaml.safe_load(path.read_text())      # the documented example is the file
 
 
 BAD = [

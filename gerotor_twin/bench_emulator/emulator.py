@@ -8,7 +8,9 @@ The emulated pump is :class:`~gerotor_twin.model.pump.PumpModel` with
   (default +10 %, so about +33 % leakage),
 
 driven by a motor and a pressure valve that follow the profile's set-points
-with first-order lags.  Every internal tick (1 kHz) advances the model with
+with first-order lags, at an oil temperature that warms up (or follows the
+profile's oil temperature set-points) with the sump's time constant
+(:func:`oil_bath`).  Every internal tick (1 kHz) advances the model with
 the inputs held, then the sensors see the result: an encoder (quantized,
 differenced over 10 ms), fast pressure transducers that see the flow ripple
 through the delivery-line impedance, a flow meter with its own time
