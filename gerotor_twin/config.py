@@ -98,18 +98,27 @@ class Boundary:
 class OperatingRange:
     """Documented operating envelope: speed [rpm] and delivery gauge pressure [bar].
 
-    ``max_speed_rpm`` bounds the speeds the model accepts; ``min_speed_rpm`` (default 0) is the lowest
-    speed the maker rates the pump for, documentation and a default for studies: the model still
-    runs below it (a pump starts from rest).
+    ``max_speed_rpm`` bounds the speeds the model accepts; ``min_speed_rpm`` (optional) is the lowest
+    speed the maker rates the pump for: the bench emulator's built-in profiles start there instead of
+    at a third of ``max_speed_rpm`` (:mod:`gerotor_twin.bench_emulator.profiles`) and the family grid of
+    ``bench accuracy --family`` (:mod:`gerotor_twin.model.family`) does too; the model and the twin
+    still accept 0 (a pump starts from rest).
     """
     max_speed_rpm: float = 3000.0
     max_delivery_bar: float = 27.5
-    min_speed_rpm: float = 0.0
+    min_speed_rpm: float | None = None
 
     def __post_init__(self):
         check_range("range.max_speed_rpm", self.max_speed_rpm, 0.0, 20000.0, lo_open=True, unit="rpm")
         check_range("range.max_delivery_bar", self.max_delivery_bar, 0.0, 400.0, lo_open=True, unit="bar")
-        check_range("range.min_speed_rpm", self.min_speed_rpm, 0.0, self.max_speed_rpm, hi_open=True, unit="rpm")
+        if self.min_speed_rpm is not None:
+            check_range("range.min_speed_rpm", self.min_speed_rpm, 0.0, self.max_speed_rpm, hi_open=True,
+                        unit="rpm (below range.max_speed_rpm)")
+
+    def to_dict(self) -> dict:
+        """The ``range`` section (``min_speed_rpm`` only when set)."""
+        out = {"max_speed_rpm": self.max_speed_rpm, "max_delivery_bar": self.max_delivery_bar}
+        return out if self.min_speed_rpm is None else {**out, "min_speed_rpm": self.min_speed_rpm}
 
 
 ERROR_MEASURES = ("pressure", "log_density")
@@ -247,7 +256,7 @@ class PumpConfig:
             "orifice": _asdict(self.orifice),
             "leakage": {"tip_dh": self.tip_dh},
             "boundary": _asdict(self.boundary),
-            "range": _asdict(self.range),
+            "range": self.range.to_dict(),
             "numerics": _asdict(self.numerics),
             "micro_motion": _asdict(self.micro_motion),
             **({"calibration": self.calibration} if self.calibration is not None else {}),

@@ -24,11 +24,26 @@ def _wear_args(spec) -> list[str]:
     return ["--wear-to", f"{spec.wear_clearance_factor_end:g}", "--wear-start", f"{spec.wear_start_s:g}"]
 
 
-def cmd_synth_bench(args) -> int:
-    from gerotor_twin.bench_emulator import BenchSpec, get_profile, synthesize
-    from gerotor_twin.bench_emulator.emulator import default_output_name
+def _profile(args, config):
+    """The built-in profile scaled to the pump's range, or the ``--profile-file`` (not both)."""
+    from gerotor_twin.bench_emulator import get_profile
+    from gerotor_twin.bench_emulator.profile_file import load_profile_file
 
-    profile = get_profile(args.profile)
+    if args.profile_file is not None:
+        if args.profile is not None:
+            raise InputError("--profile-file", args.profile_file, "either --profile or --profile-file",
+                             f"--profile {args.profile} given too")
+        return load_profile_file(args.profile_file, config.range)
+    return get_profile(args.profile or "transient", config.range)
+
+
+def cmd_synth_bench(args) -> int:
+    from gerotor_twin.bench_emulator import BenchSpec, synthesize
+    from gerotor_twin.bench_emulator.emulator import default_output_name
+    from gerotor_twin.config import load_config
+
+    config = load_config(args.config)
+    profile = _profile(args, config)
     spec = BenchSpec(seed=args.seed, bearing=args.bearing, clearance_factor=args.clearance_factor,
                      speed_rate_hz=args.speed_rate, pressure_rate_hz=args.pressure_rate,
                      flow_rate_hz=args.flow_rate, temperature_rate_hz=args.temperature_rate,
@@ -37,16 +52,14 @@ def cmd_synth_bench(args) -> int:
     if out.exists() and not args.overwrite:
         raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
-    command = shlex.join(["gerotor-twin", "synth-bench", "--profile", profile.name, "-o", str(out),
+    which = ["--profile-file", args.profile_file] if args.profile_file is not None else ["--profile", profile.name]
+    command = shlex.join(["gerotor-twin", "synth-bench", *which, "-o", str(out),
                           "--seed", str(spec.seed), "--bearing", spec.bearing,
                           "--clearance-factor", f"{spec.clearance_factor:g}",
                           "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
                           "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
                           f"{spec.temperature_rate_hz:g}"] + _wear_args(spec))
-    config = None
     if args.config:
-        from gerotor_twin.config import load_config
-        config = load_config(args.config)
         command += " --config " + shlex.quote(args.config)
     res = synthesize(profile, out, spec, config=config, overwrite=args.overwrite, command=command,
                      progress=None if args.quiet else sys.stderr)
@@ -54,7 +67,7 @@ def cmd_synth_bench(args) -> int:
     print(f"wrote {out} ({out.stat().st_size / 1e6:.2f} MB, {n} messages, {res['duration_s']:.1f} s, "
           f"seed {spec.seed})")
     for row in res["truth"]:
-        print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:5.1f} bar: mean flow "
+        print(f"  truth {row['rpm']:6.0f} rpm {row['bar']:6.2f} bar: mean flow "
               f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}, "
               f"oil {row['oil_temperature_c']:.1f} °C"
               + (f", clearance factor {row['clearance_factor']:.4f}" if "clearance_factor" in row else ""))
@@ -69,8 +82,12 @@ def add_parser(sub) -> None:
                        description="Run the bench emulator (a pump that differs from the twin on purpose, "
                                    "seen through bench sensors) along a profile and record the bench "
                                    "topics to a rosbag2-convention MCAP file. Same seed -> same bytes.")
-    p.add_argument("--profile", default="transient", help="map | transient | wear | test (default transient)")
-    p.add_argument("-o", "--output", help="MCAP file (default bags/bench_<profile>.mcap)")
+    p.add_argument("--profile", help="built-in profile, scaled to the pump's range: map | transient | wear | test "
+                                     "(default transient)")
+    p.add_argument("--profile-file", metavar="F",
+                   help="a profile YAML file instead (segments of duration_s, rpm, bar, optional ramp and "
+                        "oil_temperature_c; docs/offline.md, config/profiles/example.yaml)")
+    p.add_argument("-o", "--output", help="MCAP file (default bags/bench_<profile name>.mcap)")
     p.add_argument("--seed", type=int, default=20240601, help="noise seed (default 20240601)")
     p.add_argument("--bearing", default="short", help="outer-gear model of the emulated pump (default short)")
     p.add_argument("--clearance-factor", type=float, default=1.10,

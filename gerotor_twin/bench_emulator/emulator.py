@@ -8,7 +8,9 @@ The emulated pump is :class:`~gerotor_twin.model.pump.PumpModel` with
   (default +10 %, so about +33 % leakage),
 
 driven by a motor and a pressure valve that follow the profile's set-points
-with first-order lags.  Every internal tick (1 kHz) advances the model with
+with first-order lags, at an oil temperature that warms up (or follows the
+profile's oil temperature set-points) with the sump's time constant
+(:func:`oil_bath`).  Every internal tick (1 kHz) advances the model with
 the inputs held, then the sensors see the result: an encoder (quantized,
 differenced over 10 ms), fast pressure transducers that see the flow ripple
 through the delivery-line impedance, a flow meter with its own time
@@ -37,9 +39,9 @@ from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
 from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
 from .profiles import Profile
-from .sensors import BenchSpec, Encoder, FirstOrderLag, noise_streams, oil_warmup
+from .sensors import BenchSpec, Encoder, FirstOrderLag, OilBath, noise_streams
 
-__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "synthesize"]
+__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "oil_bath", "synthesize"]
 
 #: Topics and types written (DESIGN.md, bench inputs of the twin).
 BENCH_TOPICS = {
@@ -71,6 +73,28 @@ def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
     return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
 
 
+def oil_bath(profile: Profile, spec: BenchSpec) -> OilBath:
+    """The true oil temperature of the emulated bench along ``profile`` [°C] (:class:`OilBath`).
+
+    Set-point: each segment's ``oil_temperature_c`` (held by the segments after it), and
+    ``spec.temperature_end_c`` before the first segment that sets one; start: the first
+    segment's ``oil_temperature_c`` (the bench conditioned to it, as the drive and valve
+    start at the first speed and pressure) or ``spec.temperature_start_c``.  A profile without
+    oil temperatures gives the warm-up of :func:`~.sensors.oil_warmup`.
+    """
+    kt, ku = profile.oil_knots(spec.temperature_end_c)
+    first = profile.segments[0].oil_temperature_c
+    return OilBath(kt, ku, spec.temperature_start_c if first is None else first, spec.temperature_warmup_tau_s)
+
+
+def profile_metadata(profile: Profile) -> dict[str, str]:
+    """What the file's metadata says about the profile: name, description, segments (JSON) and,
+    for a profile file, its text."""
+    meta = {"profile": profile.name, "profile_description": profile.description,
+            "segments": json.dumps([s.as_dict() for s in profile.segments])}
+    return meta if not profile.source else {**meta, "profile_file_text": profile.source}
+
+
 def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Callable[[float], None]:
     wall0 = time.monotonic()
     last = [-1.0]
@@ -96,7 +120,8 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     Parameters
     ----------
     profile : Profile
-        Set-points of speed and delivery pressure.
+        Set-points of speed, delivery pressure and (optionally) oil temperature; they must lie in
+        the pump's range (``config.range``).
     output : path or binary stream
         MCAP file to create (or a stream such as ``io.BytesIO``).
     spec : BenchSpec
@@ -119,6 +144,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     if spec.bearing not in BEARING_MODELS:
         raise InputError("bearing", spec.bearing, " | ".join(BEARING_MODELS))
     nominal = config or load_config()
+    profile.check_within(nominal.range)
     cfg = emulated_config(nominal, spec.clearance_factor)
     model = PumpModel(cfg, spec.bearing)
     dt = 1.0 / spec.internal_rate_hz
@@ -137,9 +163,10 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         return p_atm - spec.suction_drop_pa * (w / w_max) ** 2
 
     # ---- run-in at the first set-point (not recorded)
+    bath = oil_bath(profile, spec)
+
     def oil_k(t: float) -> float:         # true oil temperature of the emulated pump [K]
-        return celsius_to_kelvin(oil_warmup(t, spec.temperature_start_c, spec.temperature_end_c,
-                                            spec.temperature_warmup_tau_s))
+        return celsius_to_kelvin(bath(t))
 
     inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]), oil_k(0.0))
     state = model.initial_state(inp, t=-spec.warmup_s)
@@ -151,13 +178,12 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     p_sensor = FirstOrderLag(spec.pressure_tau_s, dt, p_atm + sp_p[0])
     s_sensor = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_suction)
     flow_meter = FirstOrderLag(spec.flow_tau_s, dt, q_dc0)
-    thermo = FirstOrderLag(spec.temperature_tau_s, dt, spec.temperature_start_c)
+    thermo = FirstOrderLag(spec.temperature_tau_s, dt, bath.start_c)
     encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))), dt,
                       state.theta, inp.omega)
 
     meta = {EMULATOR_METADATA: {
-        "synthetic": "true", "profile": profile.name, "profile_description": profile.description,
-        "segments": json.dumps([s.__dict__ for s in profile.segments]),
+        "synthetic": "true", **profile_metadata(profile),
         "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
         "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}}
     log = McapLog(output, metadata=meta, overwrite=overwrite)

@@ -7,12 +7,13 @@ bit for bit.
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections import deque
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["FirstOrderLag", "Encoder", "BenchSpec", "noise_streams"]
+__all__ = ["FirstOrderLag", "Encoder", "BenchSpec", "OilBath", "noise_streams", "oil_warmup"]
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,7 @@ class BenchSpec:
     ripple_dc_tau_s : float
         Time constant separating the ripple from the mean flow [s].
     suction_drop_pa : float
-        Suction-line pressure drop at 3000 rpm (∝ speed²) [Pa].
+        Suction-line pressure drop at the top of the pump's range, ``range.max_speed_rpm`` (∝ speed²) [Pa].
     flow_tau_s : float
         Flow-meter time constant [s].
     flow_noise_rel, flow_noise_m3s : float
@@ -55,7 +56,9 @@ class BenchSpec:
         Oil warm-up of the emulated bench: the true oil temperature (which the
         emulated pump runs at) rises from the start value towards the end value
         as T(t) = T_end − (T_end − T_start)·exp(−t/τ_warm) [°C, °C, s]
-        (:func:`oil_warmup`).
+        (:func:`oil_warmup`).  A profile that sets ``oil_temperature_c`` replaces the
+        end value by its set-point from that segment on, and the start value by the
+        first segment's set-point if it has one (:class:`OilBath`); τ_warm stays.
     temperature_tau_s, temperature_noise_c : float
         Thermometer time constant [s] and noise [K].
     latency_s, latency_jitter_s : float
@@ -134,6 +137,58 @@ def oil_warmup(t_s: float, start_c: float, end_c: float, tau_s: float) -> float:
     if tau_s <= 0:
         return float(start_c)
     return float(end_c - (end_c - start_c) * math.exp(-max(t_s, 0.0) / tau_s))
+
+
+class OilBath:
+    """True oil temperature of the emulated bench [°C] following a set-point through the sump's warm-up.
+
+    The sump approaches the oil temperature set-point u(t) (piecewise linear, given by its break
+    points) with the warm-up time constant τ: T' = (u − T)/τ, T(0) = ``start_c``, solved exactly
+    on each piece; after the last break point u stays at its last value.  On a constant piece of
+    length h from T_a: ``oil_warmup(h, T_a, u, τ)``; on a ramp of slope s from u_a:
+    T = T_a·e + u_a·(1 − e) + s·(h − τ(1 − e)), e = exp(−h/τ).  A constant set-point from
+    t = 0 therefore gives exactly the warm-up of :func:`oil_warmup`; τ ≤ 0: T = ``start_c``
+    throughout (no warm-up, as :func:`oil_warmup`).
+
+    Parameters
+    ----------
+    knots_t : sequence of float
+        Break points of the set-point, increasing, from 0 [s].
+    knots_u : sequence of float
+        Set-point at those times [°C].
+    start_c : float
+        Oil temperature at t = 0 [°C].
+    tau_s : float
+        Warm-up time constant [s].
+    """
+
+    def __init__(self, knots_t, knots_u, start_c: float, tau_s: float):
+        t, u = [], []
+        for tk, uk in zip(list(knots_t) + [math.inf], list(knots_u) + [knots_u[-1]]):
+            t.append(float(tk))
+            u.append(float(uk))
+            if len(u) >= 3 and u[-3] == u[-2] == u[-1]:     # one constant piece, not several
+                del t[-2], u[-2]
+        self.t, self.u, self.tau, self.start_c = t, u, float(tau_s), float(start_c)
+        self.t_knot = [self.start_c]
+        for i in range(len(t) - 2 if self.tau > 0 else 0):
+            self.t_knot.append(self._piece(i, t[i + 1]))
+
+    def _piece(self, i: int, x: float) -> float:
+        ta, tb, ua, ub, temp = self.t[i], self.t[i + 1], self.u[i], self.u[i + 1], self.t_knot[i]
+        h = x - ta
+        if ua == ub:
+            return oil_warmup(h, temp, ua, self.tau)
+        s = (ub - ua) / (tb - ta)
+        g = -math.expm1(-h / self.tau)       # 1 − e
+        return temp * (1.0 - g) + ua * g + s * (h - self.tau * g)
+
+    def __call__(self, t_s: float) -> float:
+        """T(t) [°C] at time ``t_s`` [s] (≥ 0)."""
+        if self.tau <= 0:
+            return self.start_c
+        i = min(max(bisect_right(self.t, t_s) - 1, 0), len(self.t) - 2)
+        return self._piece(i, t_s)
 
 
 class FirstOrderLag:
