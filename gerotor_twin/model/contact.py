@@ -25,7 +25,7 @@ import numpy as np
 from .._jit import njit
 from ..geometry.tables import GX
 
-__all__ = ["locate", "column", "gap_coefficients", "gap_value", "gap_at", "contact"]
+__all__ = ["locate", "column", "gap_coefficients", "gap_value", "contact"]
 
 N_GAP_COEFFS = 9    # gx, gy, gγ, hxx, hxy, hyy, hxγ, hyγ, hγγ (columns GX..HGG, consecutive)
 
@@ -62,20 +62,6 @@ def gap_value(c, delta, ex, ey, g):
     return (delta + c[0] * ex + c[1] * ey + c[2] * g
             + 0.5 * (c[3] * ex * ex + 2.0 * c[4] * ex * ey + c[5] * ey * ey
                      + 2.0 * c[6] * ex * g + 2.0 * c[7] * ey * g + c[8] * g * g))
-
-
-@njit(inline="always")
-def gap_at(tab, theta, k, delta, ex, ey):
-    """Gap of lobe k [m] at shaft angle θ [rad] and displacement (ex, ey) [m], inner gear unturned, and its
-    gradient in (ex, ey) [-]: the expansion above with γ = 0, without an output array."""
-    i0, i1, f = locate(tab, theta + k * tab.shift)
-    c0 = column(tab, GX, i0, i1, f)
-    c1 = column(tab, GX + 1, i0, i1, f)
-    c3 = column(tab, GX + 3, i0, i1, f)
-    c4 = column(tab, GX + 4, i0, i1, f)
-    c5 = column(tab, GX + 5, i0, i1, f)
-    h = delta + c0 * ex + c1 * ey + 0.5 * (c3 * ex * ex + 2.0 * c4 * ex * ey + c5 * ey * ey)
-    return h, c0 + c3 * ex + c4 * ey, c1 + c4 * ex + c5 * ey
 
 
 @njit

@@ -44,11 +44,11 @@ import math
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
-from .contact import column, gap_at, locate
+from .contact import column, locate
 from .loads import journal_torque
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
-           "linearise_with", "set_velocity", "close_pending", "gear_move", "hold_contact"]
+           "linearise_with", "set_velocity", "close_pending", "gear_move"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -63,7 +63,6 @@ N_GEAR = 23
 #: table values (FX, FY, TQ) at θ₀ and at the step's end (reused as the next step's θ₀)
 ROW_F, ROW_G, ROW_DF, ROW_DG, ROW_NOW_F, ROW_NOW_G, ROW_RAW0, ROW_RAW1 = 0, 2, 4, 6, 8, 10, 12, 15
 N_ROWS = 18
-
 
 #: Relative load step of the finite-difference G (the velocity is smooth in F away from F = 0).
 _DF_REL = 1e-6
@@ -269,62 +268,3 @@ def gear_move(ex, ey, theta, km, pres, gc, rows):
     gc[GC_VX], gc[GC_VY] = gear_velocity(fx, fy, gc)
     close_pending(gc)
     return ex + gc[GC_DEX], ey + gc[GC_DEY], fx, fy
-
-
-@njit(inline="always")
-def hold_contact(gc, tab, n, delta, ex, ey, theta, dth, h):
-    r"""Keep the linearised velocity of the output step on the tooth contact it would run into.
-
-    The gears may not overlap (sec. 3.7 of [1]: the overlap check pulls the outer gear back when its
-    displacement makes a gap h_k of the unturned inner gear negative).  If the free velocity
-    :math:`\dot{\mathbf e}_0` of the step would close a gap within the step,
-    :math:`h_k + \Delta t\,(\nabla h_k\cdot\dot{\mathbf e}_0 + \partial h_k/\partial t) < 0`
-    (Δt = h the output step), the gear rides on that lobe: a frictionless contact acts along its normal
-    :math:`\hat{\mathbf n} = \nabla h_k/|\nabla h_k|` and takes out the normal velocity that would close the
-    gap further, so that the gap reaches zero at the step's end,
-
-    .. math::
-        \dot{\mathbf e}_c = \dot{\mathbf e} + \lambda\,\hat{\mathbf n},\qquad
-        \lambda = -\frac{\nabla h_k\cdot\dot{\mathbf e} + \partial h_k/\partial t + h_k/\Delta t}{|\nabla h_k|} > 0.
-
-    λ is linear in the load, so ė₀ and G of the step (:func:`set_velocity`) become
-    :math:`P\dot{\mathbf e}_0 - \hat{\mathbf n}\,(h_t + h_k/\Delta t)/|\nabla h_k|` and :math:`PG`,
-    :math:`P = I - \hat{\mathbf n}\hat{\mathbf n}^T`, held over the step like the contact of Eq. (26).
-    (The overlap check's own direction ê, tried first, made the coupled step unstable on a 10 µm pump at
-    300 and 1650 rpm / 27.5 bar: peaks +54 … +224 %.)
-    The lobe is the one whose gap the free velocity closes deepest.  Without this the stages squeeze the
-    chambers with the free velocity and the check takes the overlap back after the step: a one-step lag
-    of the squeeze at every step where the gear rides on the teeth (most steps, with tight tooth-tip
-    clearances).  Gaps from the expansion of :mod:`.contact` at γ = 0; ∂h/∂t from the gap at
-    θ + ``dth`` [rad] at the same position (ex, ey) [m]; h [s].
-    """
-    if h <= 0.0:
-        return
-    worst = 0.0
-    lam = 0.0
-    nx = 0.0
-    ny = 0.0
-    for k in range(n):
-        g0, gx, gy = gap_at(tab, theta, k, delta, ex, ey)
-        g1, _gx1, _gy1 = gap_at(tab, theta + dth, k, delta, ex, ey)
-        gn = math.hypot(gx, gy)
-        if gn <= 0.0:
-            continue
-        rate = gx * gc[GC_V0X] + gy * gc[GC_V0Y] + (g1 - g0) / h
-        end = g0 + h * rate                                 # the gap at the step's end, free gear
-        if end < worst:
-            worst = end
-            lam = -(rate + g0 / h) / gn                     # > 0: the normal speed to take out
-            nx, ny = gx / gn, gy / gn
-    if lam <= 0.0:
-        return                                              # no gap closes: free
-    gc[GC_V0X] += lam * nx                                  # ė·n̂ raised by λ: the gap closes to 0 at the end
-    gc[GC_V0Y] += lam * ny
-    gc[GC_VX], gc[GC_VY] = gc[GC_V0X], gc[GC_V0Y]
-    gc[GC_VPX], gc[GC_VPY] = gc[GC_V0X], gc[GC_V0Y]
-    ax = nx * gc[GC_GXX] + ny * gc[GC_GYX]                  # n̂ᵀG: P = I − n̂n̂ᵀ
-    ay = nx * gc[GC_GXY] + ny * gc[GC_GYY]
-    gc[GC_GXX] -= nx * ax
-    gc[GC_GXY] -= nx * ay
-    gc[GC_GYX] -= ny * ax
-    gc[GC_GYY] -= ny * ay

@@ -63,8 +63,7 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import J_TCD, closing_ports, closing_share, rhs
-from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, hold_contact, \
-    linearise, linearise_with
+from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
 from .loads import outer_gear_load
 from .params import ERROR_PRESSURE, FL_DELIVERY
 from .volumes import move_volumes
@@ -464,7 +463,6 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     elif move == MOVE_MOBILITY:
         to_pressures(y, km, ws.pres)
         linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
-        hold_contact(ws.gear, km.tab, pc.n, pc.tip_clearance, ex, ey, theta, op.omega * h, h)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
@@ -499,7 +497,6 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             counters[C_GEAR_CONTACT] += 1
         if coupled and move == MOVE_MOBILITY:
             linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
-            hold_contact(ws.gear, km.tab, pc.n, pc.tip_clearance, ex, ey, theta, op.omega * h, h)   # riding on the teeth
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
@@ -550,7 +547,6 @@ def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, w
         ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
         to_pressures(y, km, ws.pres)
         linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
-        hold_contact(ws.gear, km.tab, km.pc.n, km.pc.tip_clearance, ex, ey, theta, op.omega * h, h)
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
     return theta, t
