@@ -61,10 +61,14 @@ def cmd_geometry(args) -> int:
         "suction_port_deg": [round(math.degrees(v), 4) for v in (cfg.suction_port.start, cfg.suction_port.end)],
         "delivery_port_deg": [round(math.degrees(v), 4) for v in (cfg.delivery_port.start, cfg.delivery_port.end)],
         "suction_closing_edge": cfg.suction_port.closing_edge,
+        **_port_timing_info(cfg),
     }
     print(f"Gerotor {g.chambers}/{g.chambers - 1} from {cfg.source}")
     for k, v in info.items():
         print(f"  {k:32s} {v}")
+    short = {k: v for k, v in info.items() if k.endswith("margin_deg") and v < -1e-6}
+    for k, v in short.items():
+        print(f"  warning: {k} = {v} deg: a chamber is open to both ports there (docs/pumps.md)", file=sys.stderr)
     print(f"  displacement                     {info['displacement_m3_per_rev'] * 1e6:.3f} cm³/rev")
     if args.json:
         _write_json(args.json, info)
@@ -73,6 +77,24 @@ def cmd_geometry(args) -> int:
         plot_geometry(g, args.plot, ports=(cfg.suction_port, cfg.delivery_port))
         print(f"wrote {args.plot}")
     return 0
+
+
+def _port_timing_info(cfg) -> dict:
+    """Sealing lands of the dead-centre chambers, the kidneys' margins over them and the relief grooves [deg, m]."""
+    from .geometry.ports import port_timing, sealing_lands
+    g = cfg.gears
+    lands = sealing_lands(g)
+    out = {"dead_centre_chamber_extent_deg": [round(math.degrees(lands.max_land), 4),
+                                              round(math.degrees(lands.min_land), 4)]}
+    for k, v in port_timing(g, cfg.suction_port, cfg.delivery_port).items():
+        out[f"{k}_deg"] = round(math.degrees(v), 4)
+    for p in (cfg.suction_port, cfg.delivery_port):
+        for edge in ("opening", "closing"):
+            n = getattr(p, f"{edge}_notch")
+            if n is not None:
+                out[f"{p.name}_{edge}_notch"] = {"length_deg": round(math.degrees(n.length), 4), "width_m": n.width,
+                                                 "depth_m": n.depth, "radius_m": round(n.radius, 7), "shape": n.shape}
+    return out
 
 
 # ----------------------------------------------------------------- simulate

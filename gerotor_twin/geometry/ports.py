@@ -53,7 +53,7 @@ joined to the kidney through two sections in series: the groove's mouth under th
 leaves the chamber towards the kidney, A_g(η) (η = arc distance from the kidney edge of the covered
 point nearest the kidney: w·d, or w·d·(1 − η/L) when tapered, L = radius·length).  The notch adds
 
-.. math:: A_{notch} = \min\left(w\,s,\; A_g(\eta)\right)
+.. math:: A_{notch} = \\min\\left(w\\,s,\\; A_g(\\eta)\\right)
 
 to the open area of the chamber (the smaller section governs, the usual lumped-parameter treatment
 of relief grooves [2]; the throttling length of the groove is neglected).  So the area grows
