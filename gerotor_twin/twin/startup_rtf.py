@@ -143,7 +143,7 @@ class StartupRtf:
         """One line for the log: every point, the worst first, the threshold and the cost."""
         pts = sorted(self.points, key=lambda p: p.rtf)
         return (f"start-up real-time check ({self.bearing_model} model, {self.cost_s:.2f} s): "
-                + ", ".join(f"RTF {p.rtf:.3g} at {p.label()}" for p in pts)
+                + ", ".join(f"RTF {p.rtf:.3g} at {p.label()} (CPU-time RTF {p.cpu_rtf:.3g})" for p in pts)
                 + f"; threshold {self.threshold:g}")
 
     def message(self) -> str:
