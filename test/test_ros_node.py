@@ -345,7 +345,7 @@ def test_family_pump_startup_rtf_warned_on_diagnostics_and_logged(tmp_path):
         peer.close()
     rtf = float(rt["startup_rtf"])
     assert rt["_level"] == 1 and math.isfinite(rtf) and rtf > 0, rt
-    assert float(rt["startup_rtf_speed_rpm"]) == 4500.0 and float(rt["startup_rtf_delivery_bar"]) in (0.0, 25.0)
+    assert float(rt["startup_rtf_speed_rpm"]) == 4500.0 and float(rt["startup_rtf_delivery_bar"]) in (2.0, 25.0)
     assert f"RTF {rtf:.2g} at 4500 rpm" in rt["_message"] and "real time" in rt["_message"], rt["_message"]
     log = (tmp_path / "node.log").read_text()
     assert "start-up real-time check" in log and "[WARN]" in log and f"RTF {rtf:.2g} at 4500 rpm" in log, log

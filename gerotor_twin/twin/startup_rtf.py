@@ -3,9 +3,9 @@
 Before the twin follows a bench it can tell whether this machine runs the
 configured pump model fast enough: :func:`measure` advances the model (the
 configured outer-gear model, in the twin's sample cells) at the pump's top
-speed (``range.max_speed_rpm``) and at both ends of its delivery pressure
-(the lowest a pump delivers at, 0 bar gauge or the suction pressure if that
-is higher, and ``range.max_delivery_bar``), each from a state that has run
+speed (``range.max_speed_rpm``) and at both ends of its delivery pressure, the
+ends of the family's operating grid (:func:`gerotor_twin.model.family.pressure_extremes`:
+``range.max_delivery_bar`` and 2 bar, or 10 % of it if lower), each from a state that has run
 :data:`SETTLE_REVOLUTIONS` revolutions, and times :data:`REVOLUTIONS`
 revolutions; the whole measurement stops early when it has used
 :data:`BUDGET_S` of wall time (at least one cell is always timed per point).
@@ -19,7 +19,7 @@ measurement is not repeated); :class:`~gerotor_twin.twin.core.TwinCore`
 keeps the result and adds that status to every ``/diagnostics``.
 
 Cost: on the default pump (mobility, 3000 rpm) 2 × 7 revolutions of 20 ms,
-≈ 0.05 s of wall time; a model slower than real time is cut at
+≈ 0.05 s of wall time (docs/node.md has the figures); a model slower than real time is cut at
 :data:`BUDGET_S` (≈ 1 s) plus at most one cell per phase.
 """
 from __future__ import annotations
@@ -183,20 +183,24 @@ class StartupRtf:
 def operating_points(model: PumpModel) -> list[Inputs]:
     """The points measured: top speed at the lowest and the highest delivery pressure.
 
-    The lowest is atmospheric (0 bar gauge) or the suction pressure if that
-    is higher; in ``restriction`` mode (delivery pressure a state) one point.
+    Speed and pressures: :func:`~gerotor_twin.model.family.speed_extremes` (the
+    highest) and :func:`~gerotor_twin.model.family.pressure_extremes` (both), the
+    operating grid the family's numerics are checked on; the low pressure never
+    below the suction pressure.  In ``restriction`` mode (delivery pressure a
+    state) one point.
 
     Returns
     -------
     list of Inputs
         Shaft speed [rad/s], suction and delivery pressure [Pa absolute], reference oil temperature.
     """
+    from gerotor_twin.model.family import pressure_extremes, speed_extremes
     from gerotor_twin.units import bar_gauge_to_pa_abs, rpm_to_rad_s
     cfg = model.config
-    w = rpm_to_rad_s(cfg.range.max_speed_rpm)
+    w = rpm_to_rad_s(speed_extremes(cfg)[1])
     ps, p_atm = cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa
-    high = bar_gauge_to_pa_abs(cfg.range.max_delivery_bar, p_atm)
-    lows = [max(p_atm, ps)] if not model.restriction_mode else []
+    low, high = (bar_gauge_to_pa_abs(b, p_atm) for b in pressure_extremes(cfg))
+    lows = [max(low, ps)] if not model.restriction_mode else []
     return [model.check_inputs(Inputs(w, ps, p)) for p in (*lows, high)]
 
 
