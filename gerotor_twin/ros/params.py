@@ -53,9 +53,9 @@ PARAMETERS: tuple[Param, ...] = (
     Param("startup_rtf_threshold", 1.5, "start-up real-time check: the model's real-time factor is measured at "
                                        "start (top speed of the pump config, lowest and highest delivery "
                                        "pressure, <= 1 s); below this, WARN on /diagnostics ('gerotor_twin: real "
-                                       "time'). 1.5: besides the model, the model thread decodes the inputs and "
-                                       "publishes and logs the outputs, about half the model's time again at "
-                                       "1 kHz inputs and 200 Hz outputs (bench node); 0 = no check [-]",
+                                       "time'). 1.5: the running node advances the model at about 0.75 x this "
+                                       "figure (bench node) and its model thread also decodes the inputs and "
+                                       "publishes and logs the outputs; 0 = no check [-]",
           0.0, 1000.0),
     Param("clock_stall_s", 1.0, "the node clock unchanged this long in wall time is reported as stalled on "
                                 "/diagnostics (use_sim_time: /clock stopped) [s]", 0.01, 3600.0),
