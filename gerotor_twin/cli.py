@@ -322,7 +322,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
                                                "1000,2000,3000; accuracy: default 3000)")
     b.add_argument("--bar", default=None, help="delivery pressure(s) [bar gauge], comma-separated (default 27.5; "
-                                               "realtime uses the first)")
+                                               "realtime uses the first; node: the first, default the pump's "
+                                               "range.max_delivery_bar)")
     b.add_argument("--models", help="comma-separated outer-gear models "
                                      "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")

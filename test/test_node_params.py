@@ -38,6 +38,9 @@ def test_packaged_params_file_is_valid_and_complete():
     (("-p", "use_sim_time:=maybe"), "use_sim_time = 'maybe' is invalid; allowed: a bool"),
     (("-p", "log_compression:=gzip"), "zstd | lz4 | none"),
     (("-p", "input_coalesce_s:=0.1"), "input_coalesce_s = 0.1 is invalid; allowed: [0, 0.05] s"),
+    (("-p", "startup_rtf_threshold:=-1.0"), "startup_rtf_threshold = -1.0 is invalid; allowed: [0, 1000]"),
+    (("-p", "startup_rtf_threshold:=1e9"), "startup_rtf_threshold = 1000000000.0 is invalid; allowed: [0, 1000]"),
+    (("-p", "startup_rtf_threshold:=fast"), "startup_rtf_threshold = 'fast' is invalid; allowed: a double"),
 ])
 def test_p_overrides_validated_like_the_file(args, needle):
     """Behaviour: the -p value wins over the file (rcl precedence) and is validated, whatever its type."""
@@ -94,7 +97,7 @@ def test_run_time_changes_refused_with_reason():
     assert refuse_change(cur, [P("tick_rate_hz", 100.0)]) == (True, "")
     ok, why = refuse_change(cur, [P("use_sim_time", True)])
     assert not ok and "clock source" in why and "restart the node" in why
-    for name in ("bearing_model", "shaft_speed_topic", "log_dir", "sample_period_s"):
+    for name in ("bearing_model", "shaft_speed_topic", "log_dir", "sample_period_s", "startup_rtf_threshold"):
         assert "cannot change while the node runs" in fixed_reason(name)
 
 

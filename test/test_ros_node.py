@@ -320,3 +320,32 @@ def test_burst_of_10000_messages(bad_node):
     peer.wait_for(lambda: _input_counter(peer, "shaft_speed.accepted") > before + 1000, 15,
                   "the burst to be taken", proc)
     _still_predicting(peer, proc)
+
+
+def test_family_pump_startup_rtf_warned_on_diagnostics_and_logged(tmp_path):
+    """Behaviour (real process): a pump with another range (4500 rpm / 25 bar) and a threshold no machine
+    meets (1000): the node logs its start-up RTF, WARNs, and /diagnostics carries a WARN status with the
+    figure and the operating point (top speed), repeated while the node runs.  No input needed."""
+    from gerotor_twin.twin.startup_rtf import STATUS_NAME
+    text = (Path(__file__).resolve().parent.parent / "config" / "pump.yaml").read_text()
+    f = tmp_path / "family.yaml"
+    f.write_text(text.replace("max_speed_rpm: 3000.0", "max_speed_rpm: 4500.0")
+                 .replace("max_delivery_bar: 27.5", "max_delivery_bar: 25.0"))
+    d = claim_domain()
+    proc = start_node(d, tmp_path, f"pump_config:={f}", "startup_rtf_threshold:=1000.0")
+    peer = Peer(d)
+    try:
+        peer.wait_for(lambda: len([msg for msg in peer.get("/diagnostics")
+                                   if any(st.name == STATUS_NAME for st in msg.status)]) >= 2, 60,
+                      "two /diagnostics with the real-time status", proc)
+        rt = latest_diag(peer, STATUS_NAME)
+        assert stop_node(proc, signal.SIGINT) == 0
+    finally:
+        kill_node(proc)
+        peer.close()
+    rtf = float(rt["startup_rtf"])
+    assert rt["_level"] == 1 and math.isfinite(rtf) and rtf > 0, rt
+    assert float(rt["startup_rtf_speed_rpm"]) == 4500.0 and float(rt["startup_rtf_delivery_bar"]) in (2.0, 25.0)
+    assert f"RTF {rtf:.2g} at 4500 rpm" in rt["_message"] and "real time" in rt["_message"], rt["_message"]
+    log = (tmp_path / "node.log").read_text()
+    assert "start-up real-time check" in log and "[WARN]" in log and f"RTF {rtf:.2g} at 4500 rpm" in log, log

@@ -7,9 +7,15 @@ and a bench publisher in a SEPARATE process (:mod:`gerotor_twin.ros.bench_publis
 shaft speed + delivery pressure at ``rate`` Hz, default 1 kHz), optionally
 beside ``busy`` CPU-bound processes (a loaded bench PC).
 
+``--config F`` runs the node on that pump (``pump_config``), by default at its
+top speed (``range.max_speed_rpm``) and highest delivery pressure
+(``range.max_delivery_bar``); without it, the packaged pump.
+
 Figures (printed, never asserted), per speed
     node CPU          CPU time of the node process (all threads) / wall time over the
                       measurement window [% of one core]
+    start RTF         the node's start-up real-time check (``startup_rtf`` on /diagnostics:
+                      the model alone at the pump's top speed, worst pressure end)
     core_rtf          simulated time / compute time inside the ticks (median of /diagnostics)
     node_rtf          simulated time / CPU time of the whole node process
     latency p50/p99   input publish time -> reception (in this process) of the first
@@ -119,6 +125,8 @@ class _Peer:
 
         from gerotor_twin.io import messages as m
         from gerotor_twin.io.decode import decode
+        from gerotor_twin.twin.diagnostics import MODEL_STATUS_NAME
+        from gerotor_twin.twin.startup_rtf import STATUS_NAME as STARTUP_STATUS_NAME
 
         self.ctx = rclpy.Context()
         rclpy.init(context=self.ctx, domain_id=_domain())
@@ -130,7 +138,8 @@ class _Peer:
 
         def on_diag(data, _info):
             msg = decode(m.DIAGNOSTIC_ARRAY, data)
-            vals = {kv.key: kv.value for st in msg.status if st.name == "gerotor_twin: model" for kv in st.values}
+            vals = {kv.key: kv.value for st in msg.status if st.name in (MODEL_STATUS_NAME, STARTUP_STATUS_NAME)
+                    for kv in st.values}
             with self.lock:
                 self.diags.append((time.monotonic(), vals))
 
@@ -257,6 +266,7 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
         with peer.lock:
             window = [v for (tt, v) in peer.diags[n0:] if tt <= t1 + 1.05]
             outputs = list(peer.outputs)
+            startup = next((v for (_, v) in peer.diags if "startup_rtf" in v), {})
     finally:
         if pub is not None and pub.poll() is None:
             pub.kill()
@@ -273,6 +283,9 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
         rtfs = sorted(float(v["real_time_factor"]) for v in window[1:] if v["real_time_factor"] != "n/a")
     cpu = c1 - c0
     return {"rpm": rpm, "repeat": repeat, "node_cpu_fraction": cpu / (t1 - t0),
+            "startup_rtf": float(startup.get("startup_rtf", "nan")),
+            "startup_rtf_point": (f"{float(startup['startup_rtf_speed_rpm']):g} rpm / "
+                                  f"{float(startup['startup_rtf_delivery_bar']):g} bar" if startup else "n/a"),
             "core_rtf": rtfs[len(rtfs) // 2] if rtfs else float("nan"),
             "node_rtf": sim / cpu if sim is not None and cpu > 0 else float("nan"),
             "latency_p50_ms": p50, "latency_p99_ms": p99, "skips": int(window[-1]["skips"]) if window else None,
@@ -282,7 +295,7 @@ def _one_speed(tmp: Path, model: str, params: tuple, peer: _Peer, rpm: float, ba
             "thread_cpu_fraction": {k: (th1[k] - th0[k]) / (t1 - t0) for k in th0}}
 
 
-_MEDIANS = ("node_cpu_fraction", "core_rtf", "node_rtf", "latency_p50_ms", "latency_p99_ms")
+_MEDIANS = ("node_cpu_fraction", "startup_rtf", "core_rtf", "node_rtf", "latency_p50_ms", "latency_p99_ms")
 _SUMS = ("skips", "published", "logged", "lost", "unaccounted")
 
 
@@ -301,7 +314,8 @@ def median_row(rows: list[dict]) -> dict:
 
 def _line(r: dict) -> str:
     label = f"{r['rpm']:5g}" if r["repeat"] != "median" else "  med"
-    return (f"  {label} {100 * r['node_cpu_fraction']:8.0f}% {r['core_rtf']:9.2f} {r['node_rtf']:9.2f} "
+    return (f"  {label} {100 * r['node_cpu_fraction']:8.0f}% {r['startup_rtf']:9.2f} {r['core_rtf']:9.2f} "
+            f"{r['node_rtf']:9.2f} "
             f"{r['latency_p50_ms']:6.1f}ms {r['latency_p99_ms']:6.1f}ms {r['skips'] or 0:5d} {r['published']:10d} "
             f"{r['logged']:8d} {r['lost']:6d} {r['unaccounted']:7d}   "
             + " ".join(f"{k} {100 * v:.0f}%" for k, v in r["thread_cpu_fraction"].items()))
@@ -327,10 +341,13 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
         busy_procs = start_busy(busy)
         peer = _Peer()
         try:
-            out(f"twin_node ({model}, {bar:g} bar, inputs at {rate:g} Hz from a separate process, {seconds:g} s "
+            pump = next((q.split(":=", 1)[1] for q in params if q.startswith("pump_config:=")),
+                        "config/pump.yaml")
+            out(f"twin_node ({model}, pump {pump}, {bar:g} bar, inputs at {rate:g} Hz from a separate process, {seconds:g} s "
                 f"per speed, {busy} busy process(es), executor {result['executor']}, "
                 f"model thread {'on' if result['model_thread'] else 'off'})")
-            out(f"  {'rpm':>5s} {'node CPU':>9s} {'core RTF':>9s} {'node RTF':>9s} {'lat p50':>8s} {'lat p99':>8s} "
+            out(f"  {'rpm':>5s} {'node CPU':>9s} {'start RTF':>9s} {'core RTF':>9s} {'node RTF':>9s} "
+                f"{'lat p50':>8s} {'lat p99':>8s} "
                 f"{'skips':>5s} {'published':>10s} {'logged':>8s} {'lost':>6s} {'unacc.':>7s}")
             for rpm in rpms:
                 runs = []
@@ -344,6 +361,9 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
         finally:
             peer.close()
             stop_busy(busy_procs)
+    if result["rows"]:
+        out(f"start RTF: the node's start-up real-time check (model alone, worst point "
+            f"{result['rows'][-1]['startup_rtf_point']}, startup_rtf on /diagnostics)")
     result["load_average_1min"].append(os.getloadavg()[0])
     out(f"machine load (1-min average) {result['load_average_1min'][0]:.2f} at the start, "
         f"{result['load_average_1min'][1]:.2f} at the end: the node's CPU on a shared or idling machine moves by "
@@ -351,21 +371,55 @@ def run(model: str = "mobility", rpms=(1000, 2000, 3000), seconds: float = 4.0, 
     return result
 
 
+def plan(args) -> dict:
+    """Speeds, delivery pressure and node parameters of a ``bench node`` run, from its arguments.
+
+    ``--config F``: the node runs that pump (``pump_config``); the speeds default
+    to its top speed (``range.max_speed_rpm``), the pressure to its highest
+    (``range.max_delivery_bar``); each given value must lie in that range.
+
+    Returns
+    -------
+    dict
+        ``rpms`` [rpm], ``bar`` [bar gauge], ``params`` (``name:=value`` strings), ``config`` (path or None).
+    """
+    from gerotor_twin.config import load_config
+    from gerotor_twin.errors import InputError
+    cfg = load_config(args.config)
+    rng = cfg.range
+    try:
+        rpms = (tuple(int(float(r)) for r in str(args.node_rpms).split(",")) if args.node_rpms
+                else (int(round(rng.max_speed_rpm)),))
+    except ValueError:
+        raise InputError("--node-rpms", args.node_rpms, "comma-separated speeds [rpm]") from None
+    if not all(0 <= r <= rng.max_speed_rpm for r in rpms):
+        raise InputError("--node-rpms", args.node_rpms,
+                         f"speeds in [0, {rng.max_speed_rpm:g}] rpm (the pump's range)")
+    try:
+        bar = float(str(args.bar).split(",")[0]) if args.bar else rng.max_delivery_bar
+    except ValueError:
+        raise InputError("--bar", args.bar, "a delivery pressure [bar gauge]") from None
+    if not 0.0 <= bar <= rng.max_delivery_bar:
+        raise InputError("--bar", args.bar, f"[0, {rng.max_delivery_bar:g}] bar gauge (the pump's range)")
+    params = tuple(args.node_param or ())
+    config = str(Path(args.config).resolve()) if args.config else None
+    if config:
+        params = (f"pump_config:={config}",) + params
+    return {"rpms": rpms, "bar": bar, "params": params, "config": config}
+
+
 def cmd_bench_node(args) -> int:
     """Handler of ``gerotor-twin bench node``."""
     from gerotor_twin.errors import InputError
-    try:
-        rpms = tuple(int(float(r)) for r in str(args.node_rpms).split(","))
-    except ValueError:
-        raise InputError("--node-rpms", args.node_rpms, "comma-separated speeds [rpm]") from None
+    p = plan(args)
     if not 1.0 <= args.node_rate <= 20000.0:
         raise InputError("--node-rate", args.node_rate, "[1, 20000] Hz")
     if not 0 <= args.node_busy <= 64:
         raise InputError("--node-busy", args.node_busy, "0 to 64 processes")
     if not 1 <= args.node_repeats <= 100:
         raise InputError("--node-repeats", args.node_repeats, "1 to 100 runs per speed")
-    res = run(model=args.node_model, rpms=rpms, seconds=args.node_seconds, rate=args.node_rate,
-              busy=args.node_busy, params=tuple(args.node_param or ()), repeats=args.node_repeats)
+    res = run(model=args.node_model, rpms=p["rpms"], seconds=args.node_seconds, bar=p["bar"], rate=args.node_rate,
+              busy=args.node_busy, params=p["params"], repeats=args.node_repeats)
     if args.json:
         Path(args.json).write_text(json.dumps({"node": res}, indent=2))
         print(f"wrote {args.json}")

@@ -28,7 +28,10 @@ def add_parser(subparsers) -> None:
             action.choices = tuple(action.choices) + ("node",)
             action.help = (action.help or "") + "; node: twin node startup, CPU, RTF, latency, input accounting"
     bench.add_argument("--node-model", default="mobility", help="bench node: outer-gear model")
-    bench.add_argument("--node-rpms", default="1000,2000,3000", help="bench node: comma-separated speeds [rpm]")
+    bench.add_argument("--node-rpms", default=None,
+                       help="bench node: comma-separated speeds [rpm] (default: the pump's top speed, "
+                            "range.max_speed_rpm of --config); --config F: the node runs that pump (pump_config), "
+                            "--bar: its delivery pressure (default range.max_delivery_bar)")
     bench.add_argument("--node-seconds", type=float, default=4.0, help="bench node: run time per speed [s]")
     bench.add_argument("--node-rate", type=float, default=1000.0,
                        help="bench node: input rate of the separate publisher process, per input [Hz]")

@@ -16,6 +16,10 @@ What it does
       clock (``use_sim_time`` follows ``/clock``), encodes every output once with
       the project codec, publishes those bytes (reliable QoS) and logs the same
       bytes (``log_time`` = prediction time);
+    * at start, after the model is compiled, measures its real-time factor on
+      this machine at the pump's top speed (:mod:`gerotor_twin.twin.startup_rtf`,
+      ``startup_rtf_threshold``): logged at INFO, a WARN and a persistent WARN
+      status ``gerotor_twin: real time`` when below the threshold;
     * publishes ``/diagnostics`` (core statuses + MCAP log status) at
       ``diagnostics_rate_hz``, and once as soon as it is ready; nothing is
       published or logged before the clock is valid (``use_sim_time``: before the
@@ -119,6 +123,7 @@ class TwinNode(Node):
             waveform_samples=prm["waveform_samples"], oil_sensor_tau_s=prm["oil_sensor_tau_s"])
         self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
         self._warm_up(Inputs)
+        self._check_real_time(prm["startup_rtf_threshold"])
         self.stopping = False
         self.callback_errors = 0
         self.last_callback_error = ""
@@ -169,6 +174,18 @@ class TwinNode(Node):
         inp = Inputs(100.0, self.config.boundary.suction_pressure_pa, self.config.boundary.suction_pressure_pa)
         st = self.model.initial_state(inp)
         self.model.advance(st, 1e-3, inp)
+
+    def _check_real_time(self, threshold: float) -> None:
+        """Start-up real-time check (twin/startup_rtf.py): log the figures; WARN and a persistent status below."""
+        res = self.core.measure_startup_rtf(threshold)
+        if res is not None:
+            self.get_logger().info(res.summary())
+            self._log_events()
+
+    def _log_events(self) -> None:
+        logger = self.get_logger()
+        for level, text in self.core.pop_events():
+            (logger.error if level >= 2 else logger.warning)(text)
 
     def _open_log(self) -> None:
         """The MCAP log and its policy (files, crash recovery, decimation, status): ros/node_log.py."""
@@ -353,9 +370,7 @@ class TwinNode(Node):
             self.pubs[out.topic].publish(data)
             if self.log is not None and self.log_files.due(out.topic):
                 self.log.write_raw(self.fq[out.topic], data, out.stamp_ns, out.stamp_ns)
-        logger = self.get_logger()
-        for level, text in self.core.pop_events():
-            (logger.error if level >= 2 else logger.warning)(text)
+        self._log_events()
 
     def _watch_clock_timer(self):
         """Under use_sim_time: a steady (wall) timer that reports a stalled /clock on /diagnostics."""

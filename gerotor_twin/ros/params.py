@@ -50,6 +50,13 @@ PARAMETERS: tuple[Param, ...] = (
     Param("publish_rate_hz", 200.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
+    Param("startup_rtf_threshold", 1.5, "start-up real-time check: the model's real-time factor is measured at "
+                                       "start (top speed of the pump config, lowest and highest delivery "
+                                       "pressure, <= 1 s); below this, WARN on /diagnostics ('gerotor_twin: real "
+                                       "time'). 1.5: the running node advances the model at about 0.75 x this "
+                                       "figure (bench node) and its model thread also decodes the inputs and "
+                                       "publishes and logs the outputs; 0 = no check [-]",
+          0.0, 1000.0),
     Param("clock_stall_s", 1.0, "the node clock unchanged this long in wall time is reported as stalled on "
                                 "/diagnostics (use_sim_time: /clock stopped) [s]", 0.01, 3600.0),
     Param("shaft_speed_topic", "bench/shaft_speed", "sensor_msgs/JointState input, velocity[0] [rad/s]"),
@@ -215,6 +222,8 @@ def fixed_reason(name: str) -> str:
                "(switching it would silently stop all outputs)")
     elif name in ("pump_config", "bearing_model"):
         why = "the pump model is built from it at start"
+    elif name == "startup_rtf_threshold":
+        why = "the real-time factor is measured once, at start"
     elif name.endswith("_topic") or name in ("input_queue_depth", "input_coalesce_s"):
         why = "the subscriptions are created with it at start"
     elif name.startswith("log_"):

@@ -41,6 +41,9 @@ module              content
                     gaps in the publishers' sequence numbers; the
                     ``gerotor_twin.input_accounting`` MCAP record
 ``inbox``           :class:`Inbox`: receiving thread -> model thread hand-over
+``startup_rtf``     :func:`measure`, :class:`StartupRtf`: the model's real-time
+                    factor on this machine at the pump's top speed, measured
+                    at start (``gerotor_twin: real time`` status)
 ==================  =======================================================
 """
 from gerotor_twin.twin.core import TickResult, TwinCore

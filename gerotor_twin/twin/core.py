@@ -103,6 +103,7 @@ from gerotor_twin.twin.health import HealthMonitor, HealthSettings
 from gerotor_twin.twin.input_book import InputBook
 from gerotor_twin.twin.revolution import RevolutionRecorder
 from gerotor_twin.twin.settings import NS, TwinSettings
+from gerotor_twin.twin.startup_rtf import StartupRtf, measure as measure_rtf
 
 __all__ = ["TwinCore", "TickResult"]
 
@@ -149,6 +150,8 @@ class TwinCore:
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": {}}
         self._last_tick: TickResult | None = None
         self.health = HealthMonitor(model, health or HealthSettings())
+        #: result of :meth:`measure_startup_rtf` (None: not measured)
+        self.startup_rtf: StartupRtf | None = None
 
     # ------------------------------------------------------------------ inputs
     def add_message(self, kind: str, msg: Any, receive_ns: int, sequence: int | None = None) -> bool:
@@ -250,6 +253,35 @@ class TwinCore:
         self._last_tick = res
         return res
 
+    def measure_startup_rtf(self, threshold: float, **kwargs) -> StartupRtf | None:
+        """Measure the model's real-time factor on this machine (:mod:`gerotor_twin.twin.startup_rtf`).
+
+        Call it once, before the first tick (it runs the model on states of its
+        own; the twin's state is not touched).  From then on every
+        :meth:`diagnostics` carries the status ``gerotor_twin: real time``
+        (WARN while the figure is below ``threshold``), and a WARN event is
+        queued for :meth:`pop_events`.
+
+        Parameters
+        ----------
+        threshold : float
+            WARN below this real-time factor [-]; 0 = no measurement, no status.
+        **kwargs
+            Passed to :func:`gerotor_twin.twin.startup_rtf.measure` (``budget_s`` [s], ...).
+
+        Returns
+        -------
+        StartupRtf or None
+            The figures (None when ``threshold`` is 0).
+        """
+        if threshold == 0:
+            self.startup_rtf = None
+            return None
+        res = self.startup_rtf = measure_rtf(self.model, threshold, chunk_s=self.settings.sample_period_s, **kwargs)
+        if res.below:
+            self._events.report("model", "startup_rtf", 1, res.message(), 0)
+        return res
+
     # ------------------------------------------------------------ reporting
     @property
     def status(self) -> str:
@@ -318,7 +350,9 @@ class TwinCore:
         Statuses: ``gerotor_twin: model`` (state, real-time factor, lag, skips,
         resets, solver steps and failures, contact/cavitation events) and
         ``gerotor_twin: inputs`` (per input value, age [s], accepted/rejected
-        counts, last error).  ``extra`` statuses (dicts of
+        counts, last error), ``gerotor_twin: real time`` after
+        :meth:`measure_startup_rtf` (start-up real-time factor; WARN below its
+        threshold), ``gerotor_twin: health`` when enabled.  ``extra`` statuses (dicts of
         :func:`gerotor_twin.io.messages.diagnostic_status`) are appended.
         """
         from gerotor_twin.io import messages as m
@@ -334,6 +368,8 @@ class TwinCore:
         delta = {k: v - prev.get(k, 0) for k, v in counts.items()}
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": counts}
         statuses = [model_status(snap, delta), input_status(snap, self.settings.stale_timeout_s, delta)]
+        if self.startup_rtf is not None:
+            statuses.append(self.startup_rtf.status())
         if self.health.settings.enabled:
             statuses.append(self.health.status())
         statuses.extend(extra or [])
