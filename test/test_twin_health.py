@@ -162,3 +162,15 @@ def test_model_error_floored_at_the_calibration_residual(monkeypatch):
         q, n = f.qth - 1.2 * f.loss, 20                           # 1 s windows, a meter sample every 50 ms
         want = (s.meter_sd_rel * q) ** 2 / n + max((model_sd * q) ** 2, (e * f.qth) ** 2)
         assert seen and all(r == pytest.approx(want, rel=1e-9) for r in seen)
+
+
+def test_reference_point_capped_at_the_pumps_range(cfg):
+    """Behaviour: a pump rated below the default reference point (20 bar, 1500 rpm) gets its health
+    reference at the top of its own range instead of an error at start (a 6-bar lube pump of the family)."""
+    from dataclasses import replace as _replace
+    from gerotor_twin.model.pump import PumpModel
+    from gerotor_twin.twin.health import HealthMonitor, HealthSettings
+    small = _replace(cfg, range=_replace(cfg.range, max_speed_rpm=1200.0, max_delivery_bar=6.0))
+    mon = HealthMonitor(PumpModel(small, "fixed"), HealthSettings())
+    assert (mon.settings.reference_rpm, mon.settings.reference_bar) == (1200.0, 6.0)
+    assert 0.0 < mon.loss_ref < mon.qth_ref

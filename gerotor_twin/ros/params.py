@@ -121,7 +121,7 @@ PARAMETERS: tuple[Param, ...] = (
           0.0, 100.0),
     Param("health_error_pt", 5.0, "ERROR beyond this fall [%-pt] (>= health_warn_pt)", 0.0, 100.0),
     Param("health_reference_rpm", 1500.0, "speed of the reference operating point [rpm]", 1.0, 100000.0),
-    Param("health_reference_bar", 20.0, "delivery pressure of the reference point [bar gauge]", 0.0, 1000.0),
+    Param("health_reference_bar", 20.0, "delivery pressure of the reference point [bar gauge] (capped at the pump's range.max_delivery_bar)", 0.0, 1000.0),
     Param("health_reference_oil_c", 50.0, "oil temperature of the reference point [degC] (used once the model "
                                           "takes the oil temperature)", -50.0, 300.0),
     Param("health_window_s", 1.0, "settled interval: one estimator update per window [s]", 0.05, 600.0),

@@ -25,7 +25,8 @@ When it is updated (robust to ramps and to the flow meter's lag)
     not trusted more closely than its calibration showed it fits the pump.
 What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
     k and its standard deviation, the clearance factor k^(1/n), the volumetric
-    efficiency at the reference point (``reference_rpm``, ``reference_bar``) with k
+    efficiency at the reference point (``reference_rpm``, ``reference_bar``, each capped at the
+    pump's ``range``) with k
     and its standard deviation, the same with k = 1 (calibrated), the residual
     (measured − predicted mean flow) of this interval, the mean and RMS of the last
     ``residual_window`` residuals, the normalised innovation, the update count and
@@ -46,7 +47,7 @@ from __future__ import annotations
 
 import collections
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
@@ -164,7 +165,10 @@ class HealthMonitor:
 
     def __init__(self, model, settings: HealthSettings | None = None):
         self.model = model
-        self.settings = s = settings or HealthSettings()
+        s = settings or HealthSettings()
+        rng = model.config.range          # the reference point inside the pump's range (a 6-bar lube pump: 6 bar)
+        self.settings = s = replace(s, reference_rpm=min(s.reference_rpm, rng.max_speed_rpm),
+                                    reference_bar=min(s.reference_bar, rng.max_delivery_bar))
         self.base_config = model.config
         self.k_applied = 1.0
         self.loss_ref, self.qth_ref = reference_loss(model, s) if s.enabled else (math.nan, math.nan)
