@@ -61,16 +61,19 @@ def test_writes_the_node_topics_with_physical_values(bench_bytes, tmp_path):
 
 def test_run_bag_publishes_at_the_node_default_rate(bench_bytes, tmp_path):
     """Behaviour: run-bag writes the instantaneous outputs at the node's default ``publish_rate_hz``, and the
-    packaged config/twin.yaml gives the node the twin core's defaults: one default, in twin/settings.py."""
+    packaged config/twin.yaml gives the node the twin core's and the health monitor's defaults: one default
+    each, in twin/settings.py and twin/health.py."""
     from pathlib import Path
 
     import yaml
-    from gerotor_twin.ros.params import PARAMETERS, twin_settings
+    from gerotor_twin.ros.params import PARAMETERS, health_settings, twin_settings
+    from gerotor_twin.twin.health import HealthSettings
     from gerotor_twin.twin.settings import TwinSettings
     defaults = {p.name: p.default for p in PARAMETERS}
     shipped = yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "twin.yaml").read_text())
-    assert twin_settings(defaults) == TwinSettings()
-    assert twin_settings({**defaults, **shipped["/**"]["ros__parameters"]}) == TwinSettings()
+    given = {**defaults, **shipped["/**"]["ros__parameters"]}
+    assert twin_settings(defaults) == TwinSettings() == twin_settings(given)
+    assert health_settings(defaults) == HealthSettings() == health_settings(given)    # run-bag's --health too
     out, _ = _run(bench_bytes, tmp_path, "rate.mcap", model="fixed")
     stamps = read_topics(out, ["/twin/delivery_flow"])["/twin/delivery_flow"].log_time_ns
     assert np.median(np.diff(stamps)) * 1e-9 == pytest.approx(1.0 / defaults["publish_rate_hz"])
