@@ -21,9 +21,10 @@ _TOKEN = re.compile(r"[A-Za-z_]\w*(?:[./][A-Za-z_]\w*)*")
 
 
 def checked_files(root: Path = ROOT) -> list[Path]:
-    """README.md, bags/README.md, docs/*.md, the package's and the tests' Python files."""
+    """README.md, bags/README.md, docs/*.md, the package's, the tests' and the launch files' Python."""
     files = [root / "README.md", root / "bags" / "README.md", *sorted((root / "docs").glob("*.md")),
-             *sorted((root / "gerotor_twin").rglob("*.py")), *sorted((root / "test").glob("*.py"))]
+             *sorted((root / "gerotor_twin").rglob("*.py")), *sorted((root / "test").rglob("*.py")),
+             *sorted((root / "launch").glob("*.py"))]
     return [f for f in files if f.is_file()]
 
 
