@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from .bearing.registry import MODEL_NAMES
-from .errors import InputError, clip, one_line
+from .errors import InputError, clip, one_line, one_line_warnings
 from .io.reader import McapReadError
 from .units import celsius_to_kelvin, kelvin_to_celsius, m3s_to_lpm, pa_abs_to_bar_gauge
 
@@ -279,7 +279,8 @@ _COMMAND_MODULES = (
     "gerotor_twin.ros.replay",                    # replay (imports rclpy only when run)
     "gerotor_twin.ros.cli_commands",              # node; teaches `bench` the choice `node`
     "gerotor_twin.io.cli_commands",               # log recover
-    "gerotor_twin.offline.sweep",                 # sweep; teaches `bench` the choice `sweep`
+    "gerotor_twin.offline.sweep",                 # sweep
+    "gerotor_twin.offline.sweep_bench",           # teaches `bench` the choice `sweep`
     "gerotor_twin.offline.batch",                 # batch
 )
 
@@ -348,7 +349,8 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with one_line_warnings():
+            return int(args.func(args) or 0)
     except (InputError, McapReadError) as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2

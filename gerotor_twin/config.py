@@ -177,7 +177,7 @@ class Numerics:
     ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
     the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
     ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
-    over the next step (versions ≤ session 10).
+    over the next step (the scheme before 812d007).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048

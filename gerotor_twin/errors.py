@@ -6,11 +6,15 @@ the node can put the same text on ``/diagnostics``.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import reprlib
-from typing import Any
+import sys
+import warnings
+from typing import Any, Iterator
 
-__all__ = ["InputError", "check_range", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS"]
+__all__ = ["InputError", "check_range", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS",
+           "one_line_warnings"]
 
 #: Longest error line printed or put on /diagnostics [characters]; each part of an
 #: :class:`InputError` (field, value, allowed, reason) is clipped to a share of it.
@@ -44,6 +48,35 @@ def short_repr(value: Any, limit: int = _PART_CHARS) -> str:
 def one_line(exc: BaseException | str, limit: int = MAX_ERROR_CHARS) -> str:
     """The message of ``exc`` as one bounded line (for ``error: ...`` and /diagnostics)."""
     return clip(str(exc), limit)
+
+
+def _own_category(category: type) -> bool:
+    """Whether a warning class is one of the package's own (``TruncatedMcapWarning`` ...)."""
+    return category.__module__.split(".")[0] == __name__.split(".")[0]
+
+
+@contextlib.contextmanager
+def one_line_warnings() -> Iterator[None]:
+    """While active, the package's own warnings print as one line, ``warning: <message>``, on stderr.
+
+    Python's default shows the file, line number, class and the source line that warned (``f =
+    open_mcap(bag)``), which means nothing to a user of the command line.  Warnings of other packages
+    keep the default form; ``warnings`` filters (``-W``, ``catch_warnings``) still apply.
+    """
+    previous = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not _own_category(category):
+            previous(message, category, filename, lineno, file, line)
+            return
+        with contextlib.suppress(OSError):          # stderr gone: nothing to tell
+            print(f"warning: {one_line(message)}", file=file or sys.stderr)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = previous
 
 
 class InputError(ValueError):

@@ -29,12 +29,15 @@ ROOT = Path(__file__).resolve().parent.parent
 MS = 1_000_000
 
 
-def start_node(domain_id: int, tmp: Path, *params: str, env: dict | None = None) -> subprocess.Popen:
-    """twin_node as a subprocess; ``params`` are ``name:=value`` strings."""
+def start_node(domain_id: int, tmp: Path, *params: str, env: dict | None = None,
+               remaps: tuple[str, ...] = ()) -> subprocess.Popen:
+    """twin_node as a subprocess; ``params`` are ``name:=value`` strings, ``remaps`` ``from:=to`` rules (``-r``)."""
     args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args",
             "--params-file", str(ROOT / "config" / "twin.yaml"), "-p", f"log_dir:={tmp}"]
     for p in params:
         args += ["-p", p]
+    for r in remaps:
+        args += ["-r", r]
     e = dict(os.environ, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED="1",
              AMENT_PREFIX_PATH=os.environ.get("AMENT_PREFIX_PATH", str(ROOT / ".venv")))
     e.update(env or {})

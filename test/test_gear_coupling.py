@@ -167,7 +167,7 @@ def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(cfg, r
     Moved after the output step, the gear answers one step late and the peak overshoots beyond the 2 % budget
     (+2.21 % measured); with its squeeze in the stages it is within (−0.10 % measured).  Both RMS errors are
     well inside the budget (0.42 % partitioned, 0.18 % stages; 0.46 % in the stages before
-    ``numerics.top_tolerance``).  Merritt's law is the default since session 13."""
+    ``numerics.top_tolerance``).  Merritt's law is the default."""
     c0 = replace(cfg, orifice=replace(cfg.orifice, law="merritt"))
     pd = cfg.fluid.atmospheric_pa + bar * 1e5
     err = {}

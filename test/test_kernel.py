@@ -177,7 +177,7 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ);
     for a chamber whose delivery port is closing or has just opened (flagged by ``closing_ports``: time to
     close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.25
-    in the packaged config) and β_i replaced by max(β_i, β(p_d)) (session 13: its ln ρ error counts as it
+    in the packaged config) and β_i replaced by max(β_i, β(p_d)) (its ln ρ error counts as it
     will at delivery pressure), elsewhere not."""
     m, inp, s = warm
     km = m.kernel

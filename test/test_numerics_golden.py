@@ -19,7 +19,7 @@ from gerotor_twin.model.steady import run_steady
 
 
 def flow_number_law(cfg):
-    """``cfg`` with the flow-number orifice law, the default until session 13: the pump on which the
+    """``cfg`` with the flow-number orifice law, the default before Merritt's law (fee6c52): the pump on which the
     spikes and tops below were found and measured (Merritt's default law fills a just-opened chamber
     differently, and those instances moved; the 78-point grid in docs/numerics.md covers it)."""
     return replace(cfg, orifice=replace(cfg.orifice, law="flow_number"))
@@ -157,7 +157,7 @@ def test_peak_error_splits_into_solver_and_output_grid_closed_form():
 def test_numerics_defaults_of_the_dataclass_are_those_of_the_packaged_config(cfg):
     """Behaviour: a pump YAML without a ``numerics`` section (a user's own pump) gets the same numerics as
     the packaged config, whose defaults the error budget is measured for (the dataclass said 2° while
-    config/pump.yaml said 1.5° until session 7; 2° misses the RMS budget at 3000 rpm, docs/numerics.md)."""
+    config/pump.yaml said 1.5° until 29188e6; 2° misses the RMS budget at 3000 rpm, docs/numerics.md)."""
     from dataclasses import asdict
     from gerotor_twin.config import Numerics, parse_config
     assert asdict(Numerics()) == asdict(cfg.numerics)

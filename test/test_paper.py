@@ -93,8 +93,8 @@ def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
     With the volumes of the displaced gear (the default since issue 13) the gear's speed also
     squeezes the closed chambers; every bearing model moves inside the ROS2 stages
     (``gear_coupling``), and the largest difference stays below 1 % of δ too (measured 0.043 µm
-    Method 1, 0.061 µm FDM).  Until session 11 it reached 0.70 / 0.52 µm, 1–3 steps after a contact
-    switch: Method 1 and FDM, stepped one output step per call, lost the gear's squeeze velocity
+    Method 1, 0.061 µm FDM).  Without ``volumes.PLACEMENT_TOLERANCE`` it reached 0.70 / 0.52 µm, 1–3 steps after a
+    contact switch: Method 1 and FDM, stepped one output step per call, lost the gear's squeeze velocity
     at every step where the overlap check re-projected the gear by round-off
     (``volumes.PLACEMENT_TOLERANCE``).
     The cycles start at the same shaft angle (``chamber_cycle``).

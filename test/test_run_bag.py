@@ -59,6 +59,41 @@ def test_writes_the_node_topics_with_physical_values(bench_bytes, tmp_path):
     assert s["/bench/shaft_speed"].log_time_ns.tolist() == src.log_time_ns.tolist()
 
 
+def test_run_bag_publishes_at_the_node_default_rate(bench_bytes, tmp_path):
+    """Behaviour: run-bag writes the instantaneous outputs at the node's default ``publish_rate_hz``, and the
+    packaged config/twin.yaml gives the node the twin core's and the health monitor's defaults: one default
+    each, in twin/settings.py and twin/health.py."""
+    from pathlib import Path
+
+    import yaml
+    from gerotor_twin.ros.params import PARAMETERS, health_settings, twin_settings
+    from gerotor_twin.twin.health import HealthSettings
+    from gerotor_twin.twin.settings import TwinSettings
+    defaults = {p.name: p.default for p in PARAMETERS}
+    shipped = yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "twin.yaml").read_text())
+    given = {**defaults, **shipped["/**"]["ros__parameters"]}
+    assert twin_settings(defaults) == TwinSettings() == twin_settings(given)
+    assert health_settings(defaults) == HealthSettings() == health_settings(given)    # run-bag's --health too
+    out, _ = _run(bench_bytes, tmp_path, "rate.mcap", model="fixed")
+    stamps = read_topics(out, ["/twin/delivery_flow"])["/twin/delivery_flow"].log_time_ns
+    assert np.median(np.diff(stamps)) * 1e-9 == pytest.approx(1.0 / defaults["publish_rate_hz"])
+
+
+def test_truncated_bag_is_one_warning_line(bench_bytes, tmp_path):
+    """Behaviour (real process): run-bag over a bag cut short runs on what is valid and tells the user so in
+    one line, ``warning: ...``, not with Python's file, warning class and source line (``f = open_mcap(bag)``)."""
+    import subprocess
+    import sys
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(bench_bytes[:len(bench_bytes) * 3 // 4])
+    proc = subprocess.run([sys.executable, "-m", "gerotor_twin", "run-bag", str(cut), "-o", str(tmp_path / "o.mcap"),
+                           "--model", "fixed", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    warned = [ln for ln in proc.stderr.splitlines() if "truncated" in ln]
+    assert len(warned) == 1 and warned[0].startswith("warning: ") and "cut.mcap" in warned[0], proc.stderr
+    assert "open_mcap" not in proc.stderr and "TruncatedMcapWarning" not in proc.stderr
+
+
 def test_predictions_do_not_depend_on_tick_spacing(bench_bytes, tmp_path, monkeypatch):
     a, _ = _run(bench_bytes, tmp_path, "a.mcap", model="mobility")
     monkeypatch.setattr(rb, "_TICK_NS", 7_000_000)

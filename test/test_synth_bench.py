@@ -167,7 +167,7 @@ def test_unusable_settings_one_line(tmp_path, capsys, args, needle):
 def test_bundled_transient_bag_is_what_todays_code_writes():
     """Golden: the first second of ``bags/bench_transient.mcap`` (1000 rpm / 10 bar) is written again with
     the settings and seed stored in it; every sample of every topic agrees to 1e-9 relative.  The config
-    check above cannot see a file written by other code: the bags of session 12 had been (their own commit
+    check above cannot see a file written by other code: the bags of 43b803e had been (their own commit
     gave η 96.35 % where the file said 95.63 %, bags/README.md).  Values, not bytes, so that a machine whose
     floating point differs in the last bits still passes; a model change fails here — regenerate the bags."""
     import json

@@ -133,3 +133,23 @@ def test_pump_config_in_mcap_metadata_goes_through_the_loader(tmp_path):
     twin.path = "x.mcap"
     cfg = pump_config(twin)                    # falls back to the default pump (noted by the caller)
     assert cfg.gears.chambers == 7
+
+
+def test_own_warnings_print_as_one_line_others_as_python_does(capsys):
+    """Behaviour: under ``one_line_warnings`` (the CLI's entry) a warning of the package's own class prints
+    ``warning: <message>`` on one line, without Python's file, class and source line; another package's
+    warning goes to the handler that was there before, which is back afterwards."""
+    import warnings
+
+    from gerotor_twin.errors import one_line_warnings
+    from gerotor_twin.io.reader import TruncatedMcapWarning
+    passed_on = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = before = lambda message, category, *rest: passed_on.append(category)
+        with one_line_warnings():
+            warnings.warn("bag.mcap: truncated\nrecovered 5 messages", TruncatedMcapWarning)
+            warnings.warn("not ours", DeprecationWarning)
+        assert warnings.showwarning is before
+    assert capsys.readouterr().err == "warning: bag.mcap: truncated recovered 5 messages\n"
+    assert passed_on == [DeprecationWarning]

@@ -57,7 +57,7 @@ SHAFT_JOINT = "pump_shaft"
 #: Numerics of the emulated pump, fixed (not the twin's defaults): 0.5° output steps and
 #: 5e-5 on ln(ρ/ρ₀), no sub-step cap, so the "bench" is the better-resolved of the two and a
 #: change of the twin's numerics settings does not change what the emulator writes (a change of
-#: the integrator itself does: ∂f/∂t in the stages since session 7).
+#: the integrator itself does: ∂f/∂t in the stages, say).
 EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density", "rate_fraction": 0.0}
 
 

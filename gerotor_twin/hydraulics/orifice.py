@@ -45,7 +45,7 @@ without the factor 2 used here; the AMESim form 2λ/λ_crit [2] is as recalled, 
 a public HYGESim-style gear-machine code sets λ_crit = 1000, Cq,max = 0.7.  Merritt's law is the
 one with published constants (tests: ``test/test_hydraulics_orifice_merritt.py``); it became the
 default once the default numerics kept the error budget with it at every point of the accuracy
-grid (session 13; docs/numerics.md, docs/paper.md "Orifice law").
+grid (docs/numerics.md, docs/paper.md "Orifice law").
 """
 from __future__ import annotations
 

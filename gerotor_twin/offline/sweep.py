@@ -171,5 +171,3 @@ def add_parser(sub) -> None:
     add_engine_arguments(p)
     p.add_argument("--resume", action="store_true", help="continue the study in RESULTS (same SPEC)")
     p.set_defaults(func=cmd_sweep)
-    from .sweep_bench import add_to_bench
-    add_to_bench(sub)

@@ -25,7 +25,7 @@ from pathlib import Path
 from ..errors import InputError
 from .engine import warm_up_kernels
 
-__all__ = ["bench_sweep", "add_to_bench"]
+__all__ = ["bench_sweep", "add_parser"]
 
 BENCH_SPECS = {
     "geometry": {
@@ -99,8 +99,8 @@ def bench_sweep(points: int = 8, workers=(1, 2), scheduler: str | None = None, k
     return rows
 
 
-def add_to_bench(subparsers) -> None:
-    """Teach the existing ``bench`` sub-command the choice ``sweep``."""
+def add_parser(subparsers) -> None:
+    """Teach the existing ``bench`` sub-command the choice ``sweep`` (registered in ``cli._COMMAND_MODULES``)."""
     bench = subparsers.choices.get("bench")
     if bench is None:
         return

@@ -140,4 +140,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from gerotor_twin.errors import one_line_warnings
+    with one_line_warnings():              # a truncated log is one `warning:` line, as in the CLI
+        code = main()
+    sys.exit(code)

@@ -74,7 +74,7 @@ from rclpy.signals import SignalHandlerOptions  # noqa: E402
 from gerotor_twin.errors import InputError, clip, one_line  # noqa: E402
 from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.io.fastcdr import encode  # noqa: E402
-from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore, TwinSettings  # noqa: E402
+from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore  # noqa: E402
 from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.io.decode import decode  # noqa: E402
 from gerotor_twin.twin.inbox import Inbox  # noqa: E402
@@ -113,14 +113,7 @@ class TwinNode(Node):
         self.config = load_config(cfg_path)
         self.config_text = Path(cfg_path).read_text()
         self.model = PumpModel(self.config, prm["bearing_model"])
-        sp = prm["sample_period_s"]
-        every = max(1, round(1.0 / (prm["publish_rate_hz"] * sp)))
-        self.settings = TwinSettings(
-            sample_period_s=sp, publish_period_s=every * sp, max_span_s=prm["max_span_s"],
-            stale_timeout_s=prm["stale_timeout_s"], filter_tau_s=prm["input_filter_tau_s"],
-            stamp_restart_s=prm["stamp_restart_s"], stamp_ahead_s=prm["stamp_ahead_s"],
-            stamp_rebase_samples=prm["stamp_rebase_samples"], waveform_every=prm["waveform_every"],
-            waveform_samples=prm["waveform_samples"], oil_sensor_tau_s=prm["oil_sensor_tau_s"])
+        self.settings = P.twin_settings(prm)
         self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
         self._warm_up(Inputs)
         self._check_real_time(prm["startup_rtf_threshold"])

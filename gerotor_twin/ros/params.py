@@ -25,9 +25,27 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from gerotor_twin.errors import InputError, check_range, short_repr
+from gerotor_twin.twin.settings import TwinSettings
 
-__all__ = ["Param", "PARAMETERS", "BUILTIN", "declare", "values", "check_value", "check_overrides",
-           "fixed_reason", "refuse_change"]
+__all__ = ["Param", "PARAMETERS", "BUILTIN", "CORE_SETTINGS", "declare", "values", "check_value",
+           "check_overrides", "fixed_reason", "refuse_change", "twin_settings"]
+
+#: Node parameters that set a field of the twin core's :class:`TwinSettings` (parameter -> field).  Their
+#: defaults are the core's own (one place: run-bag, batch and the node share them); ``publish_rate_hz`` is
+#: the inverse of ``publish_period_s``.
+CORE_SETTINGS: dict[str, str] = {
+    "sample_period_s": "sample_period_s", "oil_sensor_tau_s": "oil_sensor_tau_s",
+    "input_filter_tau_s": "filter_tau_s", "stale_timeout_s": "stale_timeout_s",
+    "stamp_restart_s": "stamp_restart_s", "stamp_ahead_s": "stamp_ahead_s",
+    "stamp_rebase_samples": "stamp_rebase_samples", "max_span_s": "max_span_s",
+    "waveform_every": "waveform_every", "waveform_samples": "waveform_samples",
+}
+_CORE = TwinSettings()
+
+
+def _core(name: str):
+    """Default of the node parameter ``name``: the twin core's default of the field it sets."""
+    return getattr(_CORE, CORE_SETTINGS[name])
 
 
 @dataclass(frozen=True)
@@ -45,9 +63,9 @@ PARAMETERS: tuple[Param, ...] = (
     Param("bearing_model", "mobility", "outer-gear model", choices=("mobility", "short", "fdm", "fixed")),
     Param("tick_rate_hz", 200.0, "model tick rate on the node clock [Hz] (under use_sim_time at most one "
                                  "tick per /clock message)", 1.0, 1000.0),
-    Param("sample_period_s", 0.005, "input sampling grid: zero-order hold cell and finest output step [s]",
+    Param("sample_period_s", _core("sample_period_s"), "input sampling grid: zero-order hold cell and finest output step [s]",
           0.0005, 0.1),
-    Param("publish_rate_hz", 200.0, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
+    Param("publish_rate_hz", 1.0 / _CORE.publish_period_s, "rate of chamber pressures, delivery flow, eccentricity, tooth gaps [Hz] "
                                    "(rounded to a whole number of sample periods)", 0.1, 2000.0),
     Param("diagnostics_rate_hz", 1.0, "rate of /diagnostics [Hz]", 0.1, 10.0),
     Param("startup_rtf_threshold", 1.5, "start-up real-time check: the model's real-time factor is measured at "
@@ -68,7 +86,7 @@ PARAMETERS: tuple[Param, ...] = (
     Param("oil_temperature_topic", "bench/oil_temperature",
           "sensor_msgs/Temperature oil temperature [degC] (optional; sets the oil properties, else the "
           "config's reference temperature; '' = off)"),
-    Param("oil_sensor_tau_s", 0.0, "time constant of the oil thermometer [s]: the model runs at the reading "
+    Param("oil_sensor_tau_s", _core("oil_sensor_tau_s"), "time constant of the oil thermometer [s]: the model runs at the reading "
                                    "plus tau x its rate of change (lag compensation); 0 = the reading as is",
           0.0, 120.0),
     Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
@@ -76,20 +94,20 @@ PARAMETERS: tuple[Param, ...] = (
     Param("input_coalesce_s", 0.002, "receiving thread: after a wake-up, wait this long, then take every "
                                      "message waiting, so one wake-up takes a batch [s] (0 = take at once; "
                                      "delays receive stamps and logging by at most this)", 0.0, 0.05),
-    Param("input_filter_tau_s", 0.0, "first-order low-pass time constant on every input [s] (0 = off)",
+    Param("input_filter_tau_s", _core("input_filter_tau_s"), "first-order low-pass time constant on every input [s] (0 = off)",
           0.0, 60.0),
-    Param("stale_timeout_s", 0.5, "a required input older than this holds the model [s]", 0.001, 3600.0),
-    Param("stamp_restart_s", 1.0, "a header stamp this much older than the last one is a source restart [s]",
+    Param("stale_timeout_s", _core("stale_timeout_s"), "a required input older than this holds the model [s]", 0.001, 3600.0),
+    Param("stamp_restart_s", _core("stamp_restart_s"), "a header stamp this much older than the last one is a source restart [s]",
           0.0, 3600.0),
-    Param("stamp_ahead_s", 0.5, "a header stamp this much further ahead of its receive time than the stream's "
+    Param("stamp_ahead_s", _core("stamp_ahead_s"), "a header stamp this much further ahead of its receive time than the stream's "
                                 "usual offset is implausible: that sample alone is rejected [s]", 0.001, 3600.0),
-    Param("stamp_rebase_samples", 3, "consecutive consistent samples rejected for their stamp after which the "
+    Param("stamp_rebase_samples", _core("stamp_rebase_samples"), "consecutive consistent samples rejected for their stamp after which the "
                                      "stamp order re-anchors on them [samples]", 1, 1000),
-    Param("max_span_s", 0.25, "lag policy: most clock time integrated per tick; older backlog is skipped [s]",
+    Param("max_span_s", _core("max_span_s"), "lag policy: most clock time integrated per tick; older backlog is skipped [s]",
           0.001, 3600.0),
-    Param("waveform_every", 1, "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",
+    Param("waveform_every", _core("waveform_every"), "publish the chamber-pressure waveform every N revolutions (0 = never) [-]",
           0, 10000),
-    Param("waveform_samples", 360, "shaft-angle samples of the waveform per revolution [-]", 8, 100000),
+    Param("waveform_samples", _core("waveform_samples"), "shaft-angle samples of the waveform per revolution [-]", 8, 100000),
     Param("log_dir", "", "directory of the MCAP log (one file per run); '~' and $VARS are expanded; "
                          "'' = no log"),
     Param("log_compression", "zstd", "MCAP chunk compression", choices=("zstd", "lz4", "none")),
@@ -132,6 +150,17 @@ PARAMETERS: tuple[Param, ...] = (
     Param("health_model_sd_rel", 0.003, "model error of the mean flow, relative, in the measurement noise [-]",
           0.0, 1.0),
 )
+
+
+def twin_settings(prm: Mapping[str, Any]) -> TwinSettings:
+    """The twin core's :class:`TwinSettings` from the node's parameter values.
+
+    The publish period is ``publish_rate_hz`` rounded to a whole number of sample periods.
+    """
+    sp = prm["sample_period_s"]
+    every = max(1, round(1.0 / (prm["publish_rate_hz"] * sp)))
+    fields = {field: prm[name] for name, field in CORE_SETTINGS.items()}
+    return TwinSettings(**fields, publish_period_s=every * sp)
 
 
 def health_settings(prm: Mapping[str, Any]):

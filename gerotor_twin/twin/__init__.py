@@ -46,12 +46,25 @@ module              content
                     at start (``gerotor_twin: real time`` status)
 ==================  =======================================================
 """
-from gerotor_twin.twin.core import TickResult, TwinCore
-from gerotor_twin.twin.inputs import INPUTS, REQUIRED, InputSpec, sample_from_message
-from gerotor_twin.twin.outputs import (DIAGNOSTICS_TOPIC, OUTPUT_TOPICS, SUMMARY_FIELDS, SUMMARY_LABEL,
-                                       OutputMessage)
-from gerotor_twin.twin.settings import TwinSettings
+from importlib import import_module
 
-__all__ = ["TwinCore", "TickResult", "TwinSettings", "INPUTS", "REQUIRED", "InputSpec",
-           "sample_from_message", "OUTPUT_TOPICS", "OutputMessage", "SUMMARY_FIELDS", "SUMMARY_LABEL",
-           "DIAGNOSTICS_TOPIC"]
+#: Public name -> the module that defines it.  Loaded on first use (PEP 562), so that importing a light
+#: module such as ``gerotor_twin.twin.settings`` (the node's parameter table takes its defaults from it)
+#: does not load the model and numba.
+_EXPORTS = {
+    "TwinCore": "core", "TickResult": "core", "TwinSettings": "settings",
+    "INPUTS": "inputs", "REQUIRED": "inputs", "InputSpec": "inputs", "sample_from_message": "inputs",
+    "OUTPUT_TOPICS": "outputs", "OutputMessage": "outputs", "SUMMARY_FIELDS": "outputs",
+    "SUMMARY_LABEL": "outputs", "DIAGNOSTICS_TOPIC": "outputs",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    """The public name ``name``, imported from its module on first use."""
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    globals()[name] = value
+    return value

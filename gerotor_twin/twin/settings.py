@@ -1,7 +1,9 @@
 """Settings of the twin core (:class:`TwinSettings`): time grid, lag, staleness, filtering.
 
 All times are in seconds at this interface (SI) and kept as integer
-nanoseconds inside the core.  Every field is validated in ``__post_init__``
+nanoseconds inside the core.  These defaults are the only ones: the node's parameters that set
+them take their defaults from here (:data:`gerotor_twin.ros.params.CORE_SETTINGS`), and
+``config/twin.yaml`` repeats them (a test checks that it agrees).  Every field is validated in ``__post_init__``
 and a bad value raises :class:`~gerotor_twin.errors.InputError` naming the
 field, the value and the allowed range.
 """
@@ -32,7 +34,7 @@ class TwinSettings:
     publish_period_s : float
         Period of the instantaneous outputs (chamber pressures, delivery flow,
         eccentricity, tooth gaps) [s]; a whole multiple of ``sample_period_s``.
-        Default 0.02 s (50 Hz).
+        Default 0.005 s (200 Hz).
     max_span_s : float
         Lag policy: at most this much clock time is integrated per tick [s];
         an older backlog is skipped (see :mod:`gerotor_twin.twin.core`).
@@ -79,7 +81,7 @@ class TwinSettings:
     """
 
     sample_period_s: float = 0.005
-    publish_period_s: float = 0.02
+    publish_period_s: float = 0.005
     max_span_s: float = 0.25
     stale_timeout_s: float = 0.5
     filter_tau_s: float = 0.0
