@@ -495,13 +495,24 @@ def _check_ports(s: Port, d: Port) -> None:
                                  f"the tip would be at {math.degrees(tip):.2f} deg, past the dead centre")
 
 
-def load_config(path: str | Path | None = None) -> PumpConfig:
+def load_config(path: str | Path | None = None, what: str = "--config") -> PumpConfig:
     """Load and validate a pump YAML file (default: ``config/pump.yaml``).
 
     Read with :func:`gerotor_twin.yaml_safe.load_yaml_file` (size and alias
     expansion bounded); every problem raises one :class:`InputError`.
+
+    Parameters
+    ----------
+    path : path, optional
+        The pump YAML (default :func:`default_config_path`).
+    what : str
+        The option or parameter the path came from, named in the errors about
+        the file itself (``--config`` on the command line, ``pump_config`` in the node).
     """
     from .yaml_safe import load_yaml_file
     p = Path(path) if path is not None else default_config_path()
-    raw = load_yaml_file(p, "--config")       # missing, directory, unreadable, bomb: one InputError
+    raw = load_yaml_file(p, what)       # missing, directory, unreadable, bomb: one InputError
+    if not isinstance(raw, dict):
+        raise InputError(what, str(p), f"a YAML mapping of the sections {sorted(_SECTIONS)}",
+                         "the file is empty" if raw is None else f"the file holds a {type(raw).__name__}")
     return parse_config(raw, source=str(p))

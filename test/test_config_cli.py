@@ -161,3 +161,21 @@ def test_oil_sensor_tau_refused_alike(tmp_path, capsys, argv, bad):
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: --oil-sensor-tau = ") and "\n" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("text,reason", [("", "the file is empty"), ("# only a comment\n", "the file is empty"),
+                                         ("- gears\n", "the file holds a list")])
+def test_empty_pump_file_names_the_path_and_the_option(tmp_path, text, reason):
+    """Behaviour: an empty (or non-mapping) pump file is one line naming the option the path came from, the
+    path and that it is empty, never ``config = 'NoneType'``; the node's errors say ``pump_config``."""
+    f = tmp_path / "pump.yaml"
+    f.write_text(text)
+    with pytest.raises(InputError) as ei:
+        load_config(f)
+    msg = str(ei.value)
+    assert msg.startswith(f"--config = '{f}' is invalid; allowed: a YAML mapping of the sections")
+    assert reason in msg and "NoneType" not in msg
+    with pytest.raises(InputError, match=rf"^pump_config = '{f}' is invalid.*\({reason}\)"):
+        load_config(f, "pump_config")
+    with pytest.raises(InputError, match=r"^pump_config = .*file not found"):
+        load_config(tmp_path / "missing.yaml", "pump_config")

@@ -147,7 +147,8 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
 
 
 def test_clock_stall_reported_on_wall_timer(tmp_path):
-    """use_sim_time: /clock stops -> /diagnostics keeps coming (wall timer) and says the clock is stalled."""
+    """Behaviour: use_sim_time, /clock stops -> /diagnostics keeps coming (wall timer) and says the clock is
+    stalled; the console says it once per stall (WARN)."""
     with node_and_bench(tmp_path, "use_sim_time:=true", "clock_stall_s:=0.5") as (proc, peer, bench, _):
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 30, "clock ok", proc)
         with bench.lock:                                    # the bench thread blocks: /clock and inputs stop
@@ -156,5 +157,8 @@ def test_clock_stall_reported_on_wall_timer(tmp_path):
             n = len(peer.get("/diagnostics"))
             peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "/diagnostics while stalled", proc)
             node = latest_diag(peer, NODE)
+            said = [ln for ln in (tmp_path / "node.log").read_text().splitlines() if "clock stalled" in ln]
         assert node["_level"] == 1 and "clock stalled" in node["_message"] and int(node["clock_stalls"]) == 1
+        # ... and on the console: once for the stall (not at each /diagnostics), at WARN
+        assert len(said) == 1 and "WARN" in said[0] and "clock_stall_s = 0.5 s" in said[0], said
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 10, "clock ok again", proc)

@@ -133,6 +133,20 @@ def test_node_refuses_bad_parameters_one_line(args, needle):
 
 
 @pytest.mark.slow
+def test_node_pump_config_errors_name_pump_config(tmp_path):
+    """Behaviour (real process): a missing or empty pump file given as pump_config is one line naming
+    pump_config (not --config), the path, and for an empty file that it is empty; exit 2."""
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("")
+    for path, needle in ((tmp_path / "none.yaml", "file not found"), (empty, "the file is empty")):
+        code, out = run_node("--params-file", TWIN_YAML, "-p", f"pump_config:={path}", "-p", "log_dir:=''")
+        lines = [ln for ln in out.splitlines() if ln.strip()]
+        assert code == 2 and len(lines) == 1, out
+        assert lines[0].startswith(f"error: pump_config = '{path}' is invalid") and needle in lines[0], out
+        assert "--config" not in out and "NoneType" not in out
+
+
+@pytest.mark.slow
 def test_node_refuses_live_changes_with_reason(tmp_path):
     """Behaviour (real process): use_sim_time and bearing_model cannot be set at run time; the reason comes back."""
     import rclpy

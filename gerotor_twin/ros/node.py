@@ -25,7 +25,7 @@ What it does
       published or logged before the clock is valid (``use_sim_time``: before the
       first ``/clock``); a ``/clock`` that stops is reported on ``/diagnostics`` by a
       wall-clock (steady) timer (``clock stalled``, WARN, stamped with the last
-      clock time);
+      clock time) and once per stall on the console (WARN);
     * more than one publisher on an input topic: the first source is followed
       (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs) are
       listed and WARNed on ``/diagnostics``;
@@ -110,7 +110,7 @@ class TwinNode(Node):
         self.prm = P.declare(self, param_values)
         prm = self.prm
         cfg_path = prm["pump_config"] or str(default_config_path())
-        self.config = load_config(cfg_path)
+        self.config = load_config(cfg_path, "pump_config")
         self.config_text = Path(cfg_path).read_text()
         self.model = PumpModel(self.config, prm["bearing_model"])
         sp = prm["sample_period_s"]
@@ -386,12 +386,19 @@ class TwinNode(Node):
             if self.stopping:
                 return
             now = self.get_clock().now().nanoseconds
-            if self.clock_watch.update(now, time.monotonic()).status == "stalled":
+            if self._watch_update(now).status == "stalled":
                 self._diagnostics(now)
+
+    def _watch_update(self, now: int):
+        """The clock watch at ``now``; a stall that begins is said once on the console (WARN)."""
+        clock = self.clock_watch.update(now, time.monotonic())
+        if clock.started:
+            self.get_logger().warning(f"{clock.describe()} (clock_stall_s = {self.prm['clock_stall_s']:g} s)")
+        return clock
 
     def _diagnostics(self, now: int) -> None:
         """Publish (and log when due) /diagnostics stamped ``now``; caller holds ``_step_lock``."""
-        clock = self.clock_watch.update(now, time.monotonic())
+        clock = self._watch_update(now)
         if clock.status == "waiting" or not self._clock_valid(now):
             return                               # no valid time to stamp it with yet (sim time before /clock)
         self._next_diag = (now // self._diag_ns + 1) * self._diag_ns
