@@ -102,12 +102,15 @@ def _msg_class(msgtype: str):
 class TwinNode(Node):
     """The digital-twin node; see the module docstring."""
 
-    def __init__(self, param_values: dict | None = None, **kwargs):
+    def __init__(self, param_values: dict | None = None, param_warnings: list[str] | None = None, **kwargs):
         super().__init__("twin_node", **kwargs)
         from gerotor_twin.config import default_config_path, load_config
         from gerotor_twin.model.pump import Inputs, PumpModel
 
         self.prm = P.declare(self, param_values)
+        self.param_warnings = list(param_warnings or [])     # params-file sections not applied (WARN)
+        for text in self.param_warnings:
+            self.get_logger().warning(text)
         prm = self.prm
         cfg_path = prm["pump_config"] or str(default_config_path())
         self.config = load_config(cfg_path, "pump_config")
@@ -417,6 +420,9 @@ class TwinNode(Node):
                   "model_inbox_dropped": self.inbox.dropped}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
+        if self.param_warnings:
+            values["params_file_warnings"] = " | ".join(self.param_warnings)
+            level, msg = m.DIAG_WARN, self.param_warnings[0]
         many = self._input_publishers(values)
         if many:
             level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
@@ -537,16 +543,18 @@ def _rclpy_executor(kind: str):
     return SingleThreadedExecutor()
 
 
-def _validated_parameters(args: list[str]) -> dict | None:
-    """Every parameter the command line gives (params files and ``-p``), validated; None after printing why.
+def _validated_parameters(args: list[str]) -> tuple[dict, list[str]] | None:
+    """Every parameter the command line gives (params files and ``-p``), validated, and the warnings about
+    params-file sections that do not apply to this node; None after printing why.
 
     Done before ``rclpy.init`` so a missing or malformed params file, an
     unknown name or a bad value is one line and exit 2 (rcl would print a
     traceback or silently drop it, see :mod:`gerotor_twin.ros.param_args`).
     """
-    from gerotor_twin.ros.param_args import overrides_from_args
+    from gerotor_twin.ros.param_args import overrides_from_args, unapplied_sections
     try:
-        return P.check_overrides(overrides_from_args(list(args), "twin_node"))
+        return (P.check_overrides(overrides_from_args(list(args), "twin_node")),
+                unapplied_sections(list(args), "twin_node"))
     except InputError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return None
@@ -555,9 +563,10 @@ def _validated_parameters(args: list[str]) -> dict | None:
 def main(argv=None) -> int:
     """Console entry point ``twin_node`` (also ``ros2 run gerotor_twin twin_node``)."""
     args = sys.argv if argv is None else argv
-    param_values = _validated_parameters(args)
-    if param_values is None:
+    validated = _validated_parameters(args)
+    if validated is None:
         return 2
+    param_values, param_warnings = validated
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:  # noqa: BLE001 - rcl refused the command line (RCLError): one line, exit 2
@@ -583,7 +592,7 @@ def main(argv=None) -> int:
     main_spin = None
     try:
         try:
-            node = TwinNode(param_values)
+            node = TwinNode(param_values, param_warnings)
         except Exception as exc:  # noqa: BLE001 - one line for the user, exit 2
             from rclpy.exceptions import InvalidParameterValueException, ParameterException
             if isinstance(exc, (InputError, InvalidParameterValueException, ParameterException, OSError)):
