@@ -108,12 +108,12 @@ class TwinNode(Node):
         from gerotor_twin.model.pump import Inputs, PumpModel
 
         self.prm = P.declare(self, param_values)
-        self.param_warnings = list(param_warnings or [])     # params-file sections not applied (WARN)
-        for text in self.param_warnings:
-            self.get_logger().warning(text)
+        self.start_warnings: list[str] = []      # params-file sections not applied, config notes (WARN)
+        for text in param_warnings or ():
+            self._start_warning(text)
         prm = self.prm
         cfg_path = prm["pump_config"] or str(default_config_path())
-        self.config = load_config(cfg_path, "pump_config")
+        self.config = load_config(cfg_path, "pump_config", warn=self._start_warning)
         self.config_text = Path(cfg_path).read_text()
         self.model = PumpModel(self.config, prm["bearing_model"])
         sp = prm["sample_period_s"]
@@ -172,6 +172,11 @@ class TwinNode(Node):
             f"log {self.log.log.path if self.log else 'off'}")
 
     # ---------------------------------------------------------------- set-up
+    def _start_warning(self, text: str) -> None:
+        """A problem found at start that does not stop the node: WARN now and on every /diagnostics."""
+        self.start_warnings.append(text)
+        self.get_logger().warning(text)
+
     def _warm_up(self, Inputs) -> None:
         """Compile / load the JIT kernels now, not in the first tick."""
         inp = Inputs(100.0, self.config.boundary.suction_pressure_pa, self.config.boundary.suction_pressure_pa)
@@ -420,9 +425,9 @@ class TwinNode(Node):
                   "model_inbox_dropped": self.inbox.dropped}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
-        if self.param_warnings:
-            values["params_file_warnings"] = " | ".join(self.param_warnings)
-            level, msg = m.DIAG_WARN, self.param_warnings[0]
+        if self.start_warnings:
+            values["start_warnings"] = clip(" | ".join(self.start_warnings), 1200)
+            level, msg = m.DIAG_WARN, clip(self.start_warnings[0], 600)
         many = self._input_publishers(values)
         if many:
             level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
