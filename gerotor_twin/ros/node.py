@@ -459,8 +459,12 @@ class TwinNode(Node):
 
     # -------------------------------------------------------------- shutdown
     def _log_drops(self, log) -> dict[str, int]:
-        """Inputs received but not logged, per topic: writer queue full or refused by ``write_raw``."""
-        out = dict(log.stats().dropped_queue_full)
+        """Inputs received but not logged, per topic: writer queue full, not on disk after a write error
+        (disk full), or refused by ``write_raw``."""
+        st = log.stats()
+        out = dict(st.dropped_queue_full)
+        for topic, n in st.lost_by_topic.items():
+            out[topic] = out.get(topic, 0) + n
         for kind, n in self.log_refused.items():
             if n and kind in self.subs:
                 out[self.subs[kind].topic_name] = out.get(self.subs[kind].topic_name, 0) + n
