@@ -28,7 +28,9 @@ What it does
       clock time) and once per stall on the console (WARN);
     * more than one publisher on an input topic: the first source is followed
       (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs) are
-      listed and WARNed on ``/diagnostics``;
+      listed and WARNed on ``/diagnostics``; a publisher of another type on an
+      input topic is named with its type and the expected one (WARN on the
+      console, once, and on ``/diagnostics``);
     * the MCAP log and its policy (files, decimation, crash recovery at start,
       disk full): :mod:`gerotor_twin.ros.node_log`;
     * threads (docs/node.md has the measurements behind this): the receiving
@@ -82,7 +84,7 @@ from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata 
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
-__all__ = ["TwinNode", "main"]
+__all__ = ["TwinNode", "main", "wrong_type_text"]
 
 _MSG_CLASSES = {
     m.JOINT_STATE: ("sensor_msgs.msg", "JointState"), m.FLUID_PRESSURE: ("sensor_msgs.msg", "FluidPressure"),
@@ -221,6 +223,7 @@ class TwinNode(Node):
             raise InputError("GEROTOR_TWIN_INPUT_NODE", "0", "1 with GEROTOR_TWIN_EXECUTOR=waitset")
         self.received = dict.fromkeys(INPUTS, 0)
         self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
+        self._wrong_type_said: set[str] = set()          # wrong-type publishers already logged
         self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
         self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
         self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
@@ -428,9 +431,11 @@ class TwinNode(Node):
         if self.start_warnings:
             values["start_warnings"] = clip(" | ".join(self.start_warnings), 1200)
             level, msg = m.DIAG_WARN, clip(self.start_warnings[0], 600)
-        many = self._input_publishers(values)
+        many, wrong = self._input_publishers(values)
         if many:
             level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
+        if wrong:
+            level, msg = m.DIAG_WARN, "; ".join(wrong)
         if clock is not None:
             values.update({"clock_status": clock.status, "clock_unchanged_s": round(clock.unchanged_s, 3),
                            "clock_stalls": self.clock_watch.stalls})
@@ -442,20 +447,32 @@ class TwinNode(Node):
             level, msg = log_level, log_msg
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
 
-    def _input_publishers(self, values: dict) -> list[str]:
-        """Publishers of each input topic from the ROS graph into ``values``; topics with more than one."""
-        many = []
+    def _input_publishers(self, values: dict) -> tuple[list[str], list[str]]:
+        """Publishers of each input topic from the ROS graph into ``values``.
+
+        Returns the topics with more than one publisher of the input's type, and one text per
+        publisher of another type (DDS never delivers its messages: the input only looks stale),
+        each said once on the console (WARN).
+        """
+        many, wrong = [], []
         for kind, sub in self.subs.items():
             try:
                 infos = self.get_publishers_info_by_topic(sub.topic_name)
             except Exception:  # noqa: BLE001 - graph query during shutdown
                 continue
-            names = [f"{i.node_namespace.rstrip('/')}/{i.node_name} (gid {bytes(i.endpoint_gid)[:8].hex()})"
-                     for i in infos]
+            expected = INPUTS[kind].msgtype
+            names = [_publisher_name(i) for i in infos if i.topic_type == expected]
             values[f"publishers.{kind}"] = clip(f"{len(names)}: {', '.join(names)}", 300)
             if len(names) > 1:
                 many.append(clip(f"{sub.topic_name} ({', '.join(names)})", 200))
-        return many
+            text = wrong_type_text(sub.topic_name, expected, [(i.topic_type, _publisher_name(i)) for i in infos])
+            if text:
+                wrong.append(text)
+                values[f"wrong_type_publishers.{kind}"] = text
+                if text not in self._wrong_type_said:
+                    self._wrong_type_said.add(text)
+                    self.get_logger().warning(text)
+        return many, wrong
 
     # -------------------------------------------------------------- shutdown
     def _log_drops(self, log) -> dict[str, int]:
@@ -480,6 +497,34 @@ class TwinNode(Node):
                     {k: s.topic_name for k, s in self.subs.items()}, self.inbox.dropped))
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
+
+
+def _publisher_name(info) -> str:
+    """``/ns/node (gid 0123abcd...)`` of a graph endpoint."""
+    return f"{info.node_namespace.rstrip('/')}/{info.node_name} (gid {bytes(info.endpoint_gid)[:8].hex()})"
+
+
+def wrong_type_text(topic: str, expected: str, publishers: list[tuple[str, str]]) -> str:
+    """One line naming the publishers of ``topic`` whose type is not ``expected``; '' if none.
+
+    Parameters
+    ----------
+    topic : str
+        The input topic (as subscribed).
+    expected : str
+        The input's type, ``pkg/msg/Type``.
+    publishers : list of (type, name)
+        Every publisher of the topic in the ROS graph.
+    """
+    by_type: dict[str, list[str]] = {}
+    for msgtype, name in publishers:
+        if msgtype != expected:
+            by_type.setdefault(msgtype, []).append(name)
+    if not by_type:
+        return ""
+    parts = [f"{t} by {', '.join(n)}" for t, n in sorted(by_type.items())]
+    return clip(f"{topic.lstrip('/')} is published as {'; as '.join(parts)}; expected {expected} "
+                "(its messages never reach the node)", 400)
 
 
 def _name_os_thread(name: bytes) -> None:
