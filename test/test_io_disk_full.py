@@ -41,14 +41,17 @@ class SmallDisk(io.FileIO):
         return super().write(memoryview(b)[:left])
 
 
-def small_disk_open(monkeypatch, room: int, first_only: bool = False) -> None:
-    """McapLog opens its file on a disk of ``room`` bytes (only its first file with ``first_only``)."""
+def small_disk_open(monkeypatch, room: int, first_only: bool = False, full_from: int = 0) -> None:
+    """McapLog opens its files on a disk of ``room`` bytes each (only its first file with ``first_only``;
+    files before the ``full_from``-th are not limited)."""
     opened = []
 
     def fake_open(path, mode="r", *args, **kwargs):
         if "b" not in mode or "r" in mode or (first_only and opened):
             return open(path, mode, *args, **kwargs)
         opened.append(path)
+        if len(opened) <= full_from:
+            return open(path, mode, *args, **kwargs)
         return io.BufferedWriter(SmallDisk(path, mode.replace("b", ""), room))
     monkeypatch.setattr(mcap_log, "open", fake_open, raising=False)
 
@@ -101,6 +104,21 @@ def test_written_is_what_recovery_finds_on_a_full_disk(tmp_path, monkeypatch, ro
         bg.add_topic(t, m.FLOAT64)
     sent = offer(bg, 1500, seed=room)
     check_accounting(bg, sent, [path], tmp_path)
+
+
+@pytest.mark.parametrize("room", list(range(2_000, 12_000, 1_313)))
+def test_written_is_what_recovery_finds_with_rotation(tmp_path, monkeypatch, room):
+    """Behaviour: the same with a rotating log (the node's default), the disk filling in its third file,
+    also while a file is finalised at rotation: the finalised files count whole, the broken one as recovered."""
+    from gerotor_twin.io.mcap_log import RotatingMcapLog
+    small_disk_open(monkeypatch, room, full_from=2)
+    log = RotatingMcapLog(tmp_path / "logs", "twin", max_bytes=8192, chunk_size=2048)
+    bg = BackgroundMcapLog(log, max_queue=100_000, flush_interval_s=None)
+    for t in TOPICS:
+        bg.add_topic(t, m.FLOAT64)
+    sent = offer(bg, 1000, seed=room)
+    check_accounting(bg, sent, sorted((tmp_path / "logs").glob("twin_*.mcap")), tmp_path)
+    assert len(log.paths) >= 3
 
 
 def test_written_counts_both_files_after_a_resume(tmp_path, monkeypatch):
