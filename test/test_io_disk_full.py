@@ -121,6 +121,29 @@ def test_written_is_what_recovery_finds_with_rotation(tmp_path, monkeypatch, roo
     assert len(log.paths) >= 3
 
 
+def test_next_file_cannot_be_created_at_rotation(tmp_path, monkeypatch):
+    """Behaviour: the first file is finalised at rotation, the next cannot be created (disk full): the first
+    counts whole (once), everything after it is dropped."""
+    from gerotor_twin.io.mcap_log import RotatingMcapLog
+    opened = []
+
+    def fake_open(path, mode="r", *args, **kwargs):
+        if "b" in mode and "r" not in mode:
+            opened.append(path)
+            if len(opened) > 1:
+                raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return open(path, mode, *args, **kwargs)
+    monkeypatch.setattr(mcap_log, "open", fake_open, raising=False)
+    log = RotatingMcapLog(tmp_path / "logs", "twin", max_bytes=8192, chunk_size=2048)
+    bg = BackgroundMcapLog(log, max_queue=100_000, flush_interval_s=None)
+    for t in TOPICS:
+        bg.add_topic(t, m.FLOAT64)
+    sent = offer(bg, 300, seed=3)
+    files = sorted((tmp_path / "logs").glob("twin_*.mcap"))
+    assert len(files) == 1 and is_finalised(files[0])
+    check_accounting(bg, sent, files, tmp_path)
+
+
 def test_written_counts_both_files_after_a_resume(tmp_path, monkeypatch):
     """Behaviour: disk full, then space again and a new file: written = recovered from the first file +
     read from the second; dropped = offered - written."""

@@ -30,10 +30,10 @@ Writer-thread I/O error (e.g. disk full)
     :func:`~gerotor_twin.io.recover.recoverable_messages`) are ``written``; the
     rest (the chunk the error cut short, the open chunk), the message and all
     later ones are counted as ``lost`` (per topic in ``lost_by_topic``) while
-    :attr:`BackgroundMcapLog.error` holds the exception.  With a :class:`Reopen` policy, every ``retry_s`` the
-    thread checks the free space of the log directory and, once at least
-    ``min_free_bytes`` are free, continues in the new file its factory
-    returns (:attr:`LogStats.resumed` counts this, ``error`` is cleared,
+    :attr:`BackgroundMcapLog.error` holds the exception.  With a
+    :class:`Reopen` policy, every ``retry_s`` the thread checks the free
+    space of the log directory and, once at least ``min_free_bytes`` are
+    free, continues in the new file its factory returns (:attr:`LogStats.resumed` counts this, ``error`` is cleared,
     ``last_error`` keeps the reason).
 Flushing
     The open chunk is written and the file flushed at least every
@@ -335,7 +335,7 @@ def _on_disk(log: AnyLog) -> dict[str, int]:
     chunks after the confirmed point (read back from the file)."""
     d = log.durable
     counts = dict(d.counts)
-    if d.path is None:
+    if d.path is None or d.complete:
         return counts
     try:
         after = recoverable_messages(d.path, d.offset)

@@ -141,12 +141,15 @@ class Durable:
         Messages per topic before ``offset`` [-].
     channels : dict[int, str]
         Channel id -> topic, to read further counts by channel.
+    complete : bool
+        The file was finalised: ``counts`` are all its messages, nothing to read back.
     """
 
     path: Path | None
     offset: int
     counts: dict[str, int]
     channels: dict[int, str]
+    complete: bool = False
 
     @functools.cached_property
     def messages(self) -> int:
@@ -460,7 +463,7 @@ class McapLog:
         self._sink.close()  # no-op unless already closed or deferred
         if self._sink.closed and not self._sink.abandoned:      # finalised: every message is in the file
             self._durable = Durable(self._path, self._durable.offset, dict(self._counts),
-                                    self._durable.channels)
+                                    self._durable.channels, complete=True)
 
     def __enter__(self) -> "McapLog":
         return self
@@ -728,7 +731,7 @@ class RotatingMcapLog:
     def durable(self) -> Durable:
         """As :attr:`McapLog.durable` for the file being written, with the counts of the closed files added."""
         cur = self._log.durable
-        return Durable(cur.path, cur.offset, _merged(self._done, cur.counts), cur.channels)
+        return Durable(cur.path, cur.offset, _merged(self._done, cur.counts), cur.channels, cur.complete)
 
     @property
     def confirmed_messages(self) -> int:
