@@ -187,25 +187,33 @@ def test_node_pump_config_errors_name_pump_config(tmp_path):
 def test_node_warns_about_a_section_under_another_node_name(tmp_path):
     """Behaviour (real process): ``twin_nod: {ros__parameters: {log_dir: ...}}`` -> the node runs on its
     defaults but says so at start (WARN on the console naming the section, the expected node name and the
-    ignored key) and its /diagnostics node status is WARN with that text."""
+    ignored key) and its /diagnostics node status is WARN with that text; a pump_config note (an older
+    file's numerics.tolerance) is said the same way, once."""
     import os
     import time
     from gerotor_twin.ros.domain import claim_domain
     from ros_peer import Peer, kill_node, latest_diag, stop_node
+    import yaml
     f = tmp_path / "twin.yaml"
     f.write_text(f"twin_nod:\n  ros__parameters:\n    log_dir: {tmp_path / 'logs'}\n")
+    pump = yaml.safe_load((ROOT / "config" / "pump.yaml").read_text())
+    pump["numerics"]["tolerance"] = 5.0e-5                   # an older pump file's value
+    old = tmp_path / "old_pump.yaml"
+    old.write_text(yaml.safe_dump(pump))
     d = claim_domain()
     env = dict(os.environ, ROS_DOMAIN_ID=str(d), PYTHONUNBUFFERED="1")
     with open(tmp_path / "node.log", "w") as out:
         proc = subprocess.Popen([sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
-                                 str(f), "-p", "startup_rtf_threshold:=0.0"], stdout=out, stderr=subprocess.STDOUT,
-                                env=env, cwd=str(tmp_path), start_new_session=True)
+                                 str(f), "-p", "startup_rtf_threshold:=0.0", "-p", f"pump_config:={old}"],
+                                stdout=out, stderr=subprocess.STDOUT, env=env, cwd=str(tmp_path),
+                                start_new_session=True)
     peer = Peer(d)
     try:
         peer.wait_for(lambda: latest_diag(peer, "gerotor_twin: node").get("_level") is not None, 60,
                       "/diagnostics", proc)
         diag = latest_diag(peer, "gerotor_twin: node")
         assert diag["_level"] == 1 and "section 'twin_nod' is not applied" in diag["_message"], diag
+        assert f"pump_config {old}: numerics.tolerance = 5e-05 is far outside" in diag["start_warnings"], diag
         assert stop_node(proc) == 0
     finally:
         kill_node(proc)
@@ -214,6 +222,8 @@ def test_node_warns_about_a_section_under_another_node_name(tmp_path):
     warn = [ln for ln in text.splitlines() if "twin_nod'" in ln]
     assert len(warn) == 1 and "WARN" in warn[0] and "/twin_node" in warn[0] and "log_dir" in warn[0], text
     assert "log off" in text and not (tmp_path / "logs").exists()
+    notes = [ln for ln in text.splitlines() if "numerics.tolerance = 5e-05" in ln]
+    assert len(notes) == 1 and "WARN" in notes[0] and "ln(rho)" in notes[0], text
 
 
 @pytest.mark.slow
