@@ -92,6 +92,11 @@ def test_section_under_a_mistyped_node_name_is_named(tmp_path):
     f.write_text("/bench/twin:\n  ros__parameters:\n    log_dir: /x\n    bearing_model: fdm\n")
     assert "section '/bench/twin' is not applied" in unapplied("--params-file", str(f))[0]
     assert unapplied("--params-file", str(f), "-r", "__ns:=/bench", "-r", "__node:=twin") == []
+    # the same typo in a -p with a node part
+    assert unapplied("-p", "twin_nod:log_dir:=/x") == [
+        "-p twin_nod:log_dir:=/x is not applied: twin_nod does not match this node's name /twin_node "
+        "(use -p log_dir:=... or -p twin_node:log_dir:=...)"]
+    assert unapplied("-p", "other_node:anything:=1", "-p", "twin_node:log_dir:=/x") == []
 
 
 def test_sections_of_other_nodes_are_not_warned(tmp_path):

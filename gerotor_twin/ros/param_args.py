@@ -196,7 +196,8 @@ def unapplied_sections(argv: list[str], node_name: str, namespace: str = "/") ->
     to the node's name (``difflib`` ratio >= 0.8) or more than half of its keys
     are parameters of the node (``use_sim_time`` and the like not counted);
     its keys are checked as the node would check them (unknown names, values
-    it would refuse).  A file none of whose sections applies is named too.
+    it would refuse).  A file none of whose sections applies is named too, and
+    so is a ``-p node:name:=value`` whose node part looks meant for the node.
     Files are read with :func:`file_sections` (errors as there).
     """
     ra = parse_ros_args(argv)
@@ -212,6 +213,11 @@ def unapplied_sections(argv: list[str], node_name: str, namespace: str = "/") ->
         if sections and not meant and not any(_applies(k, fqn) for k, _ in sections):
             out.append(clip(f"--params-file {path} gives {fqn} no parameters: its sections are "
                             f"{', '.join(repr(k) for k, _ in sections)} ({expected})", MAX_ERROR_CHARS))
+    for key, text in ra.params:                 # -p twin_nod:log_dir:=... is skipped the same way
+        target, _, pname = key.rpartition(":")
+        if target and not _key_regex(target).match(fqn) and _looks_meant(target, {pname: text}, name):
+            out.append(clip(f"-p {key}:={text} is not applied: {target} does not match this node's name {fqn} "
+                            f"(use -p {pname}:=... or -p {name}:{pname}:=...)", MAX_ERROR_CHARS))
     return out
 
 
