@@ -191,3 +191,21 @@ def test_written_is_what_recovery_finds_on_a_small_filesystem(tmp_path, tmpfs):
     sent = offer(bg, 2000, seed=7)
     check_accounting(bg, sent, [path], tmp_path)
     assert os.statvfs(tmpfs).f_bavail * os.statvfs(tmpfs).f_frsize < 8192     # it was full
+
+
+def test_confirmed_only_once_handed_to_the_os(tmp_path):
+    """Behaviour: a message in the open chunk is not counted as in the file; a flush, a full chunk or the
+    close count it."""
+    log = McapLog(tmp_path / "a.mcap", chunk_size=1000)
+    log.add_topic(TOPICS[0], m.FLOAT64)
+    for i in range(3):
+        log.write_raw(TOPICS[0], b"\x00\x01\x00\x00" + bytes(8), i + 1)
+    assert log.confirmed_messages == 0
+    log.flush()
+    assert log.confirmed_messages == 3 and log.durable.offset == (tmp_path / "a.mcap").stat().st_size
+    log.write_raw(TOPICS[0], b"\x00\x01\x00\x00" + bytes(2000), 10)     # fills a chunk: written at once
+    assert log.confirmed_messages == 4
+    log.write_raw(TOPICS[0], b"\x00\x01\x00\x00" + bytes(8), 11)
+    assert log.confirmed_messages == 4
+    log.close()
+    assert log.confirmed_messages == 5 and log.durable.complete

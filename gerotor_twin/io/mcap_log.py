@@ -302,6 +302,7 @@ class McapLog:
         self._durable = Durable(self._path, _MAGIC_SIZE, {}, {})    # what is known to be in the file
         with self._sink.guard() as w:
             w.start(profile=PROFILE, library=library)
+            self._tell = self._safe_tell()      # magic and header: not a chunk
         for mname, data in (metadata or {}).items():
             self.add_metadata(mname, data)
 
