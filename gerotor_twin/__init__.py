@@ -8,7 +8,9 @@ MCAP logging, bag replay and model-vs-bench reports.
 module                   responsibility
 =======================  ==================================================
 ``config``               typed, validated pump / fluid / operating config (YAML);
-                         ``config_oil``: its ``oil``, ``mixture``, ``fluid_model``
+                         ``config_oil``: its ``oil``, ``mixture``, ``fluid_model``;
+                         ``config_notes``: values far from their default, changed
+                         and removed keys (warnings, not errors)
 ``errors``               :class:`InputError`: field, value, allowed range
 ``units``                rpm/bar/L-min conversions, used only at the edges
 ``geometry``             gerotor profiles, chambers (V, dV/dθ, l_x, l_y, arms),

@@ -2,18 +2,23 @@
 
 Every section maps to a frozen dataclass; unknown keys, missing keys, wrong
 types, NaN and out-of-range values raise :class:`~gerotor_twin.errors.InputError`
-naming the dotted field, the value and the allowed range.
+naming the dotted field, the value and the allowed range.  A number far from
+its key's default, a key whose meaning changed and a removed key are not
+errors but notes (:mod:`gerotor_twin.config_notes`, :attr:`PumpConfig.notes`),
+said by :func:`load_config`.
 """
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from .errors import InputError, check_range
 from .geometry.gerotor import GerotorGeometry
 from .geometry.ports import FACES_MAX, NOTCH_SHAPES, Notch, Port, geometry_port_angles, sealing_lands
+from .config_notes import drop_removed_keys, far_from_default
 from .config_oil import (DEFAULT_REFERENCE_TEMPERATURE_K, OIL_SET_FLUID_KEYS, fluid_at, fluid_with_oil,
                          oil_to_dict, parse_air, parse_fluid_model, parse_oil)
 from .hydraulics.fluid import Fluid
@@ -240,6 +245,9 @@ class PumpConfig:
         t_ref = self.reference_temperature_k
         return fluid_at(self.fluid, self.oil, t_ref, t_ref if t_k is None else t_k)
     calibration: dict | None = field(default=None, compare=False, hash=False)  #: provenance of a fitted config (``gerotor-twin calibrate``), kept as written
+    #: one-line notes on the file's keys (a value far from its default, a changed or removed key;
+    #: :mod:`gerotor_twin.config_notes`), said by :func:`load_config`
+    notes: tuple[str, ...] = field(default=(), compare=False, hash=False)
 
     def to_dict(self) -> dict:
         """Back to the YAML structure (for logs and metadata)."""
@@ -334,6 +342,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     """Validate a raw mapping (the YAML document) into a :class:`PumpConfig`."""
     if not isinstance(raw, dict):
         raise InputError("config", type(raw).__name__, "a YAML mapping of sections")
+    raw, notes = drop_removed_keys(raw)
     unknown = set(raw) - _SECTIONS
     if unknown:
         k = sorted(unknown)[0]
@@ -378,7 +387,8 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
                       reference_temperature_k=t_ref, fluid_model=parse_fluid_model(raw.get("fluid_model", "mixture")),
                       air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
                       micro_motion=_micro_motion(raw),
-                      calibration=_calibration_block(raw.get("calibration")))
+                      calibration=_calibration_block(raw.get("calibration")),
+                      notes=tuple(notes + far_from_default("numerics", ns, num)))
 
 
 def _micro_motion(raw: dict) -> MicroMotion:
@@ -495,13 +505,36 @@ def _check_ports(s: Port, d: Port) -> None:
                                  f"the tip would be at {math.degrees(tip):.2f} deg, past the dead centre")
 
 
-def load_config(path: str | Path | None = None) -> PumpConfig:
+def _warn(text: str) -> None:
+    """Say a config note on stderr (through :mod:`logging`, logger ``gerotor_twin.config``)."""
+    logging.getLogger(__name__).warning("warning: %s", text)
+
+
+def load_config(path: str | Path | None = None, what: str = "--config",
+                warn: Callable[[str], None] | None = _warn) -> PumpConfig:
     """Load and validate a pump YAML file (default: ``config/pump.yaml``).
 
     Read with :func:`gerotor_twin.yaml_safe.load_yaml_file` (size and alias
     expansion bounded); every problem raises one :class:`InputError`.
+
+    Parameters
+    ----------
+    path : path, optional
+        The pump YAML (default :func:`default_config_path`).
+    what : str
+        The option or parameter the path came from, named in the errors about
+        the file itself (``--config`` on the command line, ``pump_config`` in the node).
+    warn : callable or None
+        Called with each of the config's :attr:`PumpConfig.notes` (one line each; default: a
+        logging WARNING, on stderr when logging is not configured); None: silent.
     """
     from .yaml_safe import load_yaml_file
     p = Path(path) if path is not None else default_config_path()
-    raw = load_yaml_file(p, "--config")       # missing, directory, unreadable, bomb: one InputError
-    return parse_config(raw, source=str(p))
+    raw = load_yaml_file(p, what)       # missing, directory, unreadable, bomb: one InputError
+    if not isinstance(raw, dict):
+        raise InputError(what, str(p), f"a YAML mapping of the sections {sorted(_SECTIONS)}",
+                         "the file is empty" if raw is None else f"the file holds a {type(raw).__name__}")
+    cfg = parse_config(raw, source=str(p))
+    for note in cfg.notes if warn is not None else ():
+        warn(f"{what} {p}: {note}")
+    return cfg

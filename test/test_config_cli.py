@@ -161,3 +161,96 @@ def test_oil_sensor_tau_refused_alike(tmp_path, capsys, argv, bad):
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: --oil-sensor-tau = ") and "\n" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("text,reason", [("", "the file is empty"), ("# only a comment\n", "the file is empty"),
+                                         ("- gears\n", "the file holds a list")])
+def test_empty_pump_file_names_the_path_and_the_option(tmp_path, text, reason):
+    """Behaviour: an empty (or non-mapping) pump file is one line naming the option the path came from, the
+    path and that it is empty, never ``config = 'NoneType'``; the node's errors say ``pump_config``."""
+    f = tmp_path / "pump.yaml"
+    f.write_text(text)
+    with pytest.raises(InputError) as ei:
+        load_config(f)
+    msg = str(ei.value)
+    assert msg.startswith(f"--config = '{f}' is invalid; allowed: a YAML mapping of the sections")
+    assert reason in msg and "NoneType" not in msg
+    with pytest.raises(InputError, match=rf"^pump_config = '{f}' is invalid.*\({reason}\)"):
+        load_config(f, "pump_config")
+    with pytest.raises(InputError, match=r"^pump_config = .*file not found"):
+        load_config(tmp_path / "missing.yaml", "pump_config")
+
+
+def _pump_file(tmp_path, **numerics):
+    r = raw()
+    r["numerics"].update(numerics)
+    f = tmp_path / "old_pump.yaml"
+    f.write_text(yaml.safe_dump(r))
+    return f
+
+
+def test_tolerance_of_an_older_pump_file_is_named_with_its_hint(tmp_path):
+    """Behaviour: ``numerics.tolerance: 5.0e-5`` (an error on ln rho in older files) loads, with one note naming
+    the key, the value, the default (read from Numerics), the sensible range and what changed; on the CLI a
+    ``warning:`` line on stderr, exit 0."""
+    from gerotor_twin.config import Numerics
+    f = _pump_file(tmp_path, tolerance=5.0e-5)
+    said = []
+    cfg = load_config(f, warn=said.append)
+    d = Numerics().tolerance
+    assert cfg.numerics.tolerance == 5.0e-5 and len(said) == 1 and said == [f"--config {f}: {cfg.notes[0]}"]
+    assert said[0].startswith(f"--config {f}: numerics.tolerance = 5e-05 is far outside its sensible range "
+                              f"[{d / 100:g}, {d * 100:g}] (default {d:g}; 100x either way); "
+                              "numerics.tolerance is a fraction of p_d - p_s"), said
+    assert "ln(rho)" in said[0] and "\n" not in said[0]
+    p = run_cli("geometry", "--config", str(f), "--json", str(tmp_path / "g.json"))
+    assert p.returncode == 0 and f"warning: --config {f}: numerics.tolerance = 5e-05" in p.stderr, p.stderr
+    # the old meaning asked for explicitly: no note
+    assert load_config(_pump_file(tmp_path, tolerance=5.0e-5, error_measure="log_density")).notes == ()
+
+
+def test_every_numerics_number_far_from_its_default_is_named():
+    """Behaviour: for every numeric key of ``numerics`` a value 100x (or more) away from its default, either
+    way, is named (key, value, default, range); 10x away, the default itself and 0 ("off") are not."""
+    import dataclasses
+    from gerotor_twin.config import Numerics
+    checked = 0
+    for f in dataclasses.fields(Numerics):
+        d = f.default
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or d == 0:
+            continue
+        for value, far in ((d * 100, True), (d / 100, True), (d * 10, False), (d / 10, False), (d, False), (0, False)):
+            r = raw()
+            r["numerics"][f.name] = int(value) if isinstance(d, int) else value
+            try:
+                cfg = parse_config(r)
+            except InputError:
+                continue                               # outside the hard limits: an error anyway
+            notes = [n for n in cfg.notes if n.startswith(f"numerics.{f.name} = ")]
+            assert len(notes) == far, (f.name, value, cfg.notes)
+            checked += far
+    assert checked >= 5
+
+
+def test_removed_key_is_a_notice_not_an_error(monkeypatch):
+    """Behaviour: a key listed as removed in config_notes.KEY_NOTES loads with a one-line notice that it is
+    ignored (and why); unlisted, the same key is an unknown-key error."""
+    from gerotor_twin import config_notes
+    r = raw()
+    r["numerics"]["substep_factor"] = 2.0
+    with pytest.raises(InputError, match="numerics.substep_factor.*unknown key"):
+        parse_config(r)
+    monkeypatch.setitem(config_notes.KEY_NOTES, "numerics.substep_factor",
+                        config_notes.KeyNote("removed", "the sub-steps follow numerics.tolerance alone"))
+    cfg = parse_config(r)
+    assert cfg.notes == ("numerics.substep_factor is no longer used and is ignored (= 2.0): the sub-steps "
+                         "follow numerics.tolerance alone",)
+    assert "substep_factor" in r["numerics"]                # the caller's mapping is left as it was
+
+
+def test_shipped_pump_files_have_no_notes():
+    """Behaviour: the packaged pump and the family load without a note (the range rule fits what is shipped)."""
+    files = [default_config_path(), *sorted((ROOT / "config" / "pumps").glob("*.yaml")),
+             *sorted((ROOT / "bags").glob("*.yaml"))]
+    for f in files:
+        assert load_config(f, warn=None).notes == (), f

@@ -147,7 +147,8 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
 
 
 def test_clock_stall_reported_on_wall_timer(tmp_path):
-    """use_sim_time: /clock stops -> /diagnostics keeps coming (wall timer) and says the clock is stalled."""
+    """Behaviour: use_sim_time, /clock stops -> /diagnostics keeps coming (wall timer) and says the clock is
+    stalled; the console says it once per stall (WARN)."""
     with node_and_bench(tmp_path, "use_sim_time:=true", "clock_stall_s:=0.5") as (proc, peer, bench, _):
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 30, "clock ok", proc)
         with bench.lock:                                    # the bench thread blocks: /clock and inputs stop
@@ -156,5 +157,47 @@ def test_clock_stall_reported_on_wall_timer(tmp_path):
             n = len(peer.get("/diagnostics"))
             peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "/diagnostics while stalled", proc)
             node = latest_diag(peer, NODE)
+            said = [ln for ln in (tmp_path / "node.log").read_text().splitlines() if "clock stalled" in ln]
         assert node["_level"] == 1 and "clock stalled" in node["_message"] and int(node["clock_stalls"]) == 1
+        # ... and on the console: once for the stall (not at each /diagnostics), at WARN
+        assert len(said) == 1 and "WARN" in said[0] and "clock_stall_s = 0.5 s" in said[0], said
         peer.wait_for(lambda: latest_diag(peer, NODE).get("clock_status") == "ok", 10, "clock ok again", proc)
+
+
+def test_wrong_type_publisher_named_on_console_and_diagnostics(tmp_path):
+    """Behaviour: a std_msgs/Float64 publisher on bench/shaft_speed (DDS never delivers it to the JointState
+    subscription) is named with its type, its node and the expected type: WARN on /diagnostics and once on the
+    console; it is not counted as a second publisher."""
+    from std_msgs.msg import Float64
+    with node_and_bench(tmp_path) as (proc, peer, bench, d):
+        ctx = rclpy.Context()
+        rclpy.init(context=ctx, domain_id=d)
+        other = rclpy.create_node("wrong_bench", context=ctx)          # its own participant
+        try:
+            pub = other.create_publisher(Float64, "bench/shaft_speed", 10)
+            peer.wait_for(lambda: "wrong_type_publishers.shaft_speed" in latest_diag(peer, NODE), 30,
+                          "the wrong-type publisher on /diagnostics", proc)
+            pub.publish(Float64(data=1.0))
+            n = len(peer.get("/diagnostics"))
+            peer.wait_for(lambda: len(peer.get("/diagnostics")) >= n + 2, 10, "more /diagnostics", proc)
+            node = latest_diag(peer, NODE)
+        finally:
+            other.destroy_node()
+            rclpy.try_shutdown(context=ctx)
+    assert node["_level"] == 1, node
+    assert node["_message"].startswith("bench/shaft_speed is published as std_msgs/msg/Float64 by /wrong_bench "
+                                       "(gid "), node["_message"]
+    assert "; expected sensor_msgs/msg/JointState" in node["_message"]
+    assert node["publishers.shaft_speed"].startswith("1: /bench_peer")            # one publisher of the type
+    said = [ln for ln in (tmp_path / "node.log").read_text().splitlines() if "is published as" in ln]
+    assert len(said) == 1 and "WARN" in said[0] and "/wrong_bench" in said[0], said
+
+
+def test_wrong_type_text():
+    """Behaviour: the line names each other type with its publishers, and the expected type; none: ''."""
+    from gerotor_twin.ros.node import wrong_type_text
+    js, f64 = "sensor_msgs/msg/JointState", "std_msgs/msg/Float64"
+    assert wrong_type_text("/bench/shaft_speed", js, [(js, "/bench")]) == ""
+    assert wrong_type_text("/bench/shaft_speed", js, [(js, "/bench"), (f64, "/a"), (f64, "/b")]) == (
+        "bench/shaft_speed is published as std_msgs/msg/Float64 by /a, /b; expected sensor_msgs/msg/JointState "
+        "(its messages never reach the node)")

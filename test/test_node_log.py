@@ -92,3 +92,37 @@ def test_write_error_then_resume_in_a_new_file(caplog):
     assert level == m.DIAG_WARN and "resumed after" in msg
     f = open_mcap(new[0])
     assert f.complete and f.topic_types() == {TOPIC: m.FLOAT64} and f.message_count == 3
+
+
+@pytest.fixture
+def read_only_dir(tmp_path):
+    """A read-only tmpfs (EROFS, as on a read-only mount); None where it cannot be mounted."""
+    import subprocess
+    mnt = tmp_path / "ro"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(mnt)], capture_output=True)
+    if r.returncode != 0:
+        yield None
+        return
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], check=False)
+
+
+@pytest.mark.parametrize("case", ["file in the way", "read-only file system"])
+def test_log_dir_that_cannot_be_written_is_one_line_naming_log_dir(tmp_path, read_only_dir, case):
+    """Behaviour: a log_dir the node cannot write is one line naming log_dir, its value and the reason
+    (not a raw ``[Errno 30] ...``)."""
+    if case == "file in the way":
+        (tmp_path / "f").write_text("x")
+        value, reason = str(tmp_path / "f" / "logs"), "not a directory"
+    else:
+        if read_only_dir is None:
+            pytest.skip("cannot mount a read-only tmpfs here")
+        value, reason = str(read_only_dir / "logs"), "read-only file system"
+    with pytest.raises(InputError) as ei:
+        policy(log_dir=value).open([(TOPIC, m.FLOAT64, "reliable")])
+    msg = str(ei.value)
+    assert msg.startswith(f"log_dir = '{value}' is invalid; allowed: a directory this process can create")
+    assert reason in msg and "Errno" not in msg and "\n" not in msg

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from gerotor_twin.errors import MAX_ERROR_CHARS, InputError
-from gerotor_twin.ros.param_args import overrides_from_args, params_from_file
+from gerotor_twin.ros.param_args import overrides_from_args, params_from_file, unapplied_sections
 from gerotor_twin.ros.params import PARAMETERS, check_overrides, fixed_reason, refuse_change
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -69,6 +69,48 @@ def test_params_file_sections_and_typos(tmp_path):
     # remapped node name: the other section applies
     with pytest.raises(InputError, match="anything"):
         effective("--params-file", str(f), "-r", "__node:=other_node")
+
+
+def unapplied(*ros_args, name="twin_node"):
+    return unapplied_sections(["twin_node", "--ros-args", *ros_args], name)
+
+
+def test_section_under_a_mistyped_node_name_is_named(tmp_path):
+    """Behaviour: a params file whose section is under a mistyped node name (rcl skips it silently) gives a
+    warning naming the section, the node name expected and the ignored keys, the keys checked as the node
+    would (an unknown name, a value it would refuse)."""
+    f = tmp_path / "p.yaml"
+    f.write_text("twin_nod:\n  ros__parameters:\n    log_dir: /data/twin\n    tick_rate_hz: 5000.0\n"
+                 "    colour: red\n")
+    assert effective("--params-file", str(f)) == {}                    # rcl's rule: nothing applies
+    (w,) = unapplied("--params-file", str(f))
+    assert w.startswith(f"--params-file {f}: section 'twin_nod' is not applied: it does not match this "
+                        "node's name /twin_node (sections that apply: twin_node, /twin_node, /**)"), w
+    assert "its 3 parameter(s) are ignored: log_dir, tick_rate_hz, colour" in w
+    assert "2 of them would be refused too, e.g. tick_rate_hz = 5000.0 is invalid; allowed: [1, 1000] Hz" in w
+    # a section of mostly twin_node parameters under another name, and the remapped node name
+    f.write_text("/bench/twin:\n  ros__parameters:\n    log_dir: /x\n    bearing_model: fdm\n")
+    assert "section '/bench/twin' is not applied" in unapplied("--params-file", str(f))[0]
+    assert unapplied("--params-file", str(f), "-r", "__ns:=/bench", "-r", "__node:=twin") == []
+    # the same typo in a -p with a node part
+    assert unapplied("-p", "twin_nod:log_dir:=/x") == [
+        "-p twin_nod:log_dir:=/x is not applied: twin_nod does not match this node's name /twin_node "
+        "(use -p log_dir:=... or -p twin_node:log_dir:=...)"]
+    assert unapplied("-p", "other_node:anything:=1", "-p", "twin_node:log_dir:=/x") == []
+
+
+def test_sections_of_other_nodes_are_not_warned(tmp_path):
+    """Behaviour: a shared params file with other nodes' sections (and one for this node) gives no warning;
+    one with no section for this node at all says so, naming its sections."""
+    assert unapplied("--params-file", TWIN_YAML) == []
+    f = tmp_path / "p.yaml"
+    f.write_text("/**:\n  ros__parameters:\n    use_sim_time: true\n"
+                 "other_node:\n  ros__parameters:\n    anything: 1\n    log_dir: /y\n")
+    assert unapplied("--params-file", str(f)) == []
+    f.write_text("other_node:\n  ros__parameters:\n    anything: 1\n")
+    (w,) = unapplied("--params-file", str(f))
+    assert w == (f"--params-file {f} gives /twin_node no parameters: its sections are 'other_node' "
+                 "(sections that apply: twin_node, /twin_node, /**)")
 
 
 @pytest.mark.parametrize("content,needle", [
@@ -130,6 +172,63 @@ def test_node_refuses_bad_parameters_one_line(args, needle):
     code, out = run_node(*args)
     lines = [ln for ln in out.splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and needle in lines[0] and "Traceback" not in out, out
+
+
+@pytest.mark.slow
+def test_node_pump_config_errors_name_pump_config(tmp_path):
+    """Behaviour (real process): a missing or empty pump file given as pump_config is one line naming
+    pump_config (not --config), the path, and for an empty file that it is empty; exit 2."""
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("")
+    for path, needle in ((tmp_path / "none.yaml", "file not found"), (empty, "the file is empty")):
+        code, out = run_node("--params-file", TWIN_YAML, "-p", f"pump_config:={path}", "-p", "log_dir:=''")
+        lines = [ln for ln in out.splitlines() if ln.strip()]
+        assert code == 2 and len(lines) == 1, out
+        assert lines[0].startswith(f"error: pump_config = '{path}' is invalid") and needle in lines[0], out
+        assert "--config" not in out and "NoneType" not in out
+
+
+@pytest.mark.slow
+def test_node_warns_about_a_section_under_another_node_name(tmp_path):
+    """Behaviour (real process): ``twin_nod: {ros__parameters: {log_dir: ...}}`` -> the node runs on its
+    defaults but says so at start (WARN on the console naming the section, the expected node name and the
+    ignored key) and its /diagnostics node status is WARN with that text; a pump_config note (an older
+    file's numerics.tolerance) is said the same way, once."""
+    import os
+    import time
+    from gerotor_twin.ros.domain import claim_domain
+    from ros_peer import Peer, kill_node, latest_diag, stop_node
+    import yaml
+    f = tmp_path / "twin.yaml"
+    f.write_text(f"twin_nod:\n  ros__parameters:\n    log_dir: {tmp_path / 'logs'}\n")
+    pump = yaml.safe_load((ROOT / "config" / "pump.yaml").read_text())
+    pump["numerics"]["tolerance"] = 5.0e-5                   # an older pump file's value
+    old = tmp_path / "old_pump.yaml"
+    old.write_text(yaml.safe_dump(pump))
+    d = claim_domain()
+    env = dict(os.environ, ROS_DOMAIN_ID=str(d), PYTHONUNBUFFERED="1")
+    with open(tmp_path / "node.log", "w") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
+                                 str(f), "-p", "startup_rtf_threshold:=0.0", "-p", f"pump_config:={old}"],
+                                stdout=out, stderr=subprocess.STDOUT, env=env, cwd=str(tmp_path),
+                                start_new_session=True)
+    peer = Peer(d)
+    try:
+        peer.wait_for(lambda: latest_diag(peer, "gerotor_twin: node").get("_level") is not None, 60,
+                      "/diagnostics", proc)
+        diag = latest_diag(peer, "gerotor_twin: node")
+        assert diag["_level"] == 1 and "section 'twin_nod' is not applied" in diag["_message"], diag
+        assert f"pump_config {old}: numerics.tolerance = 5e-05 is far outside" in diag["start_warnings"], diag
+        assert stop_node(proc) == 0
+    finally:
+        kill_node(proc)
+        peer.close()
+    text = (tmp_path / "node.log").read_text()
+    warn = [ln for ln in text.splitlines() if "twin_nod'" in ln]
+    assert len(warn) == 1 and "WARN" in warn[0] and "/twin_node" in warn[0] and "log_dir" in warn[0], text
+    assert "log off" in text and not (tmp_path / "logs").exists()
+    notes = [ln for ln in text.splitlines() if "numerics.tolerance = 5e-05" in ln]
+    assert len(notes) == 1 and "WARN" in notes[0] and "ln(rho)" in notes[0], text
 
 
 @pytest.mark.slow

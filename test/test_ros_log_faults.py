@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import subprocess
 import time
 import uuid
@@ -34,7 +35,7 @@ from rosbags.highlevel import AnyReader  # noqa: E402
 
 from gerotor_twin.cli import main as cli  # noqa: E402
 from gerotor_twin.io.messages import ns_from_stamp  # noqa: E402
-from gerotor_twin.io.reader import TruncatedMcapWarning, read_topics  # noqa: E402
+from gerotor_twin.io.reader import TruncatedMcapWarning, open_mcap, read_topics  # noqa: E402
 from gerotor_twin.io.recover import is_finalised  # noqa: E402
 from gerotor_twin.ros.domain import claim_domain  # noqa: E402
 from ros_peer import Peer, kill_node, latest_diag, start_node, stop_node  # noqa: E402
@@ -170,6 +171,9 @@ def small_disk(tmp_path):
 
 
 def test_disk_full_error_recoverable_and_resumes(tmp_path, small_disk):
+    """Behaviour: disk full -> ERROR, the model runs on, the file is recoverable, logging resumes; the
+    messages the node says it wrote are those in the recovered and the resumed file, and per input
+    logged + log_dropped = received."""
     logs = small_disk / "log"
     d = claim_domain()
     proc = start_node(d, tmp_path, f"log_dir:={logs}", "log_min_free_mb:=1.0", "log_retry_s:=0.5",
@@ -214,6 +218,19 @@ def test_disk_full_error_recoverable_and_resumes(tmp_path, small_disk):
     assert on_disk and on_disk <= got_before, len(on_disk - got_before)
     got_after = set(stamps_in([resumed]))
     assert after_on_disk <= got_after and len(after_on_disk & set(after)) >= 0.8 * len(after)
+    # "written" is what the files hold after recovery, and every input is logged or counted dropped
+    closed = re.findall(r"MCAP log closed: (\d+) messages written, (\d+) dropped",
+                        (tmp_path / "node.log").read_text())
+    assert closed, (tmp_path / "node.log").read_text()[-2000:]
+    recovered = broken.with_name(broken.name[:-5] + ".recovered.mcap")
+    in_files = sum(sum(1 for _ in open_mcap(f).iter_raw()) for f in (recovered, resumed))
+    assert in_files == int(closed[-1][0]), (in_files, closed)
+    acc = open_mcap(resumed).metadata["gerotor_twin.input_accounting"]
+    for kind in ("shaft_speed", "delivery_pressure"):
+        topic = acc[f"{kind}.topic"]
+        logged = sum(1 for f in (recovered, resumed) for _ in open_mcap(f).iter_raw([topic]))
+        assert int(acc[f"{kind}.logged"]) == logged and \
+            int(acc[f"{kind}.received"]) == logged + int(acc[f"{kind}.log_dropped"]), (kind, logged, acc)
 
 
 def test_sim_time_nothing_before_first_clock(tmp_path):

@@ -7,6 +7,7 @@ import pytest
 
 from gerotor_twin.bench_emulator import BenchSpec, Profile, Segment, synthesize
 from gerotor_twin.cli import main
+from gerotor_twin.errors import InputError
 from gerotor_twin.io import McapReadError, read_topics
 from gerotor_twin.io.reader import multiarray_series, scalar_series
 from gerotor_twin.offline import run_bag as rb
@@ -236,3 +237,23 @@ def test_inputs_the_twin_cannot_use_exit_2(tmp_path, capsys, speed, needle):
     assert len(err) == 1 and "never started" in err[0] and needle in err[0] and "shaft_speed" in err[0], err
     s = read_topics(out)
     assert len(s["/bench/shaft_speed"]) == 200 and len(s["/bench/delivery_pressure"]) == 200
+
+
+def test_output_equal_to_input_refused(bench_bytes, tmp_path, capsys):
+    """Behaviour: ``run-bag IN -o IN --overwrite`` (also through a symlink or a hard link) refuses, one line
+    naming -o, and leaves the recording untouched."""
+    bag = tmp_path / "bench.mcap"
+    bag.write_bytes(bench_bytes)
+    (tmp_path / "link.mcap").symlink_to(bag)
+    (tmp_path / "sub").mkdir()
+    import os
+    os.link(bag, tmp_path / "hard.mcap")
+    for out in (str(bag), str(tmp_path / "link.mcap"), str(tmp_path / "sub" / ".." / "bench.mcap"),
+                str(tmp_path / "hard.mcap")):
+        assert main(["run-bag", str(bag), "-o", out, "--overwrite", "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: -o = '{out}' is invalid; allowed: a file other than the input bag"), err
+        assert len(err.strip().splitlines()) == 1
+    with pytest.raises(InputError, match="a file other than the input bag"):
+        rb.run_bag(bag, bag, overwrite=True, progress=None)
+    assert bag.read_bytes() == bench_bytes

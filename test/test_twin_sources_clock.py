@@ -124,6 +124,15 @@ def test_clock_watch():
     assert cw.stalls == 2
 
 
+def test_clock_stall_said_once_per_stall():
+    """Behaviour: the update that finds a stall says so (``started``: the node logs it once at WARN), the
+    following updates of the same stall do not; a new stall after the clock moved is said again."""
+    cw = ClockWatch(stall_after_s=1.0)
+    seen = [cw.update(5, t).started for t in (0.0, 0.5, 1.2, 1.5, 3.0)]
+    assert seen == [False, False, True, False, False]
+    assert not cw.update(6, 3.1).started and cw.update(6, 4.2).started and cw.stalls == 2
+
+
 def test_burst_with_heavy_loss_is_one_source():
     """Seen in the full suite: a burst of 10 000 messages overflows the subscription history (depth 100), the
     node receives what is left, with sequence gaps of thousands, after stalls.  An earlier rule that bounded a

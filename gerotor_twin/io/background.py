@@ -16,14 +16,24 @@ Queue full
     :data:`STATS_METADATA`.
 After close
     Writes return False and are counted as ``dropped_after_close``.
+Written, pending, lost
+    ``written`` counts a message once it is on disk: its chunk was handed to
+    the OS (the file is flushed after every chunk and every ``flush_interval_s``)
+    or the file was finalised, so ``written`` is what a recovery of the file
+    finds.  Messages in the queue or the open chunk are ``pending``
+    (``queued = written + pending + lost``; at close ``pending`` is 0, and
+    every message offered is written or dropped).
 Writer-thread I/O error (e.g. disk full)
     Logged once; the file is closed without finalising (what reached it stays
-    recoverable: ``gerotor-twin log recover``); the message and all later
-    ones are counted as ``lost`` while :attr:`BackgroundMcapLog.error` holds
-    the exception.  With a :class:`Reopen` policy, every ``retry_s`` the
-    thread checks the free space of the log directory and, once at least
-    ``min_free_bytes`` are free, continues in the new file its factory
-    returns (:attr:`LogStats.resumed` counts this, ``error`` is cleared,
+    recoverable: ``gerotor-twin log recover``).  Of the messages handed to that
+    file, those in chunks that are complete on disk (read back from the file,
+    :func:`~gerotor_twin.io.recover.recoverable_messages`) are ``written``; the
+    rest (the chunk the error cut short, the open chunk), the message and all
+    later ones are counted as ``lost`` (per topic in ``lost_by_topic``) while
+    :attr:`BackgroundMcapLog.error` holds the exception.  With a
+    :class:`Reopen` policy, every ``retry_s`` the thread checks the free
+    space of the log directory and, once at least ``min_free_bytes`` are
+    free, continues in the new file its factory returns (:attr:`LogStats.resumed` counts this, ``error`` is cleared,
     ``last_error`` keeps the reason).
 Flushing
     The open chunk is written and the file flushed at least every
@@ -52,6 +62,8 @@ from typing import Any, Callable, Mapping, Union
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.mcap_log import McapLog, RotatingMcapLog, _check_time
 from gerotor_twin.io.qos import QosSpec
+from gerotor_twin.io.reader import McapReadError
+from gerotor_twin.io.recover import recoverable_messages
 
 __all__ = ["STATS_METADATA", "LogStats", "Reopen", "BackgroundMcapLog"]
 
@@ -75,7 +87,7 @@ class LogStats:
     dropped_after_close : int
         Writes attempted after :meth:`BackgroundMcapLog.close`.
     lost : int
-        Accepted but not written because of a writer-thread error.
+        Accepted but not written because of a writer-thread error (not on disk).
     max_queue_depth : int
         Highest queue length seen.
     error : str or None
@@ -95,11 +107,17 @@ class LogStats:
     error: str | None = None
     resumed: int = 0
     last_error: str | None = None
+    lost_by_topic: dict[str, int] = field(default_factory=dict)
 
     @property
     def dropped(self) -> int:
         """All messages offered but not written."""
         return sum(self.dropped_queue_full.values()) + self.dropped_after_close + self.lost
+
+    @property
+    def pending(self) -> int:
+        """Accepted, not yet on disk (in the queue or the open chunk) and not lost."""
+        return self.queued - self.written - self.lost
 
     def as_metadata(self) -> dict[str, str]:
         """String form for an MCAP Metadata record."""
@@ -108,6 +126,7 @@ class LogStats:
                "dropped_after_close": str(self.dropped_after_close), "lost": str(self.lost),
                "max_queue_depth": str(self.max_queue_depth)}
         out.update({f"dropped_queue_full/{k}": str(v) for k, v in self.dropped_queue_full.items()})
+        out.update({f"lost/{k}": str(v) for k, v in self.lost_by_topic.items()})
         if self.error:
             out["error"] = self.error
         if self.last_error:
@@ -167,8 +186,11 @@ class _Pump:
         self.queued = itertools.count(1)    # next() is atomic in CPython
         self.n_queued = 0
         self.retracted = 0
-        self.written = 0
+        self.written = 0                    # on disk: base_written + the current log's confirmed messages
+        self.base_written = 0               # on disk in the files given up after an error
+        self.offered: dict[str, int] = {}   # per topic, handed to the current log
         self.lost = 0
+        self.lost_by_topic: dict[str, int] = {}
         self.max_depth = 0
         self.drop_lock = threading.Lock()   # producers only; close() never takes it
         self.dropped: dict[str, int] = {}
@@ -179,7 +201,22 @@ class _Pump:
         return LogStats(self.n_queued - self.retracted, self.written, dict(self.dropped),
                         self.dropped_after_close, self.lost, self.max_depth,
                         None if self.error is None else repr(self.error), self.resumed,
-                        None if self.last_error is None else repr(self.last_error))
+                        None if self.last_error is None else repr(self.last_error), dict(self.lost_by_topic))
+
+    def _lose(self, topic: str, n: int = 1) -> None:
+        self.lost += n
+        self.lost_by_topic[topic] = self.lost_by_topic.get(topic, 0) + n
+
+    def _settle(self) -> None:
+        """After a write error: of the messages handed to this log, those on disk are written, the rest lost."""
+        on_disk = _on_disk(self.log)
+        for topic, n in self.offered.items():
+            kept = min(n, on_disk.get(topic, 0))
+            self.base_written += kept
+            if n > kept:
+                self._lose(topic, n - kept)
+        self.offered = {}
+        self.written = self.base_written
 
     def _fail(self, exc: BaseException) -> None:
         """A write error: stop writing this file, keep what it holds (unfinalised), report once."""
@@ -189,12 +226,14 @@ class _Pump:
             self.log.abandon()
         except Exception:  # noqa: BLE001 - the file is broken already
             pass
+        self._settle()
         self.unfinalised.append(path)
         retry = "" if self.reopen is None else (
             f"; a new file is started when {self.reopen.min_free_bytes / 1e6:g} MB are free again "
             f"(checked every {self.reopen.retry_s:g} s)")
         _log.error("MCAP writer thread: %s; %s left unfinalised (recover it with `gerotor-twin log "
-                   "recover`); messages are counted as lost%s", exc, path, retry)
+                   "recover`: %d message(s) written in all files, %d lost); messages are counted as lost%s",
+                   exc, path, self.written, self.lost, retry)
         self.next_retry = time.monotonic() + (self.reopen.retry_s if self.reopen else 0.0)
 
     def _handle(self, item: Any) -> None:
@@ -203,23 +242,26 @@ class _Pump:
             try:
                 if self.error is None:
                     self.log.flush(self.fsync)
+                    self.written = self.base_written + self.log.confirmed_messages
             except Exception as exc:
                 self._fail(exc)
             if args is not None:
                 args.set()
             return
+        if kind == "msg" and self.error is not None:
+            self._lose(args[0])
+            return
         if self.error is not None:
-            self.lost += kind == "msg"
             return
         try:
             if kind == "msg":
                 topic, data, log_ns, pub_ns, seq = args
+                self.offered[topic] = self.offered.get(topic, 0) + 1
                 self.log.write_raw(topic, data, log_ns, pub_ns, sequence=seq)
-                self.written += 1
+                self.written = self.base_written + self.log.confirmed_messages
             else:
                 self.log.add_metadata(*args)
         except Exception as exc:  # keep the thread alive; report once
-            self.lost += kind == "msg"
             self._fail(exc)
 
     def _maybe_resume(self, now: float) -> None:
@@ -262,18 +304,18 @@ class _Pump:
         self._finish()
 
     def _finish(self) -> None:
+        """Flush (so the stats record holds the final counts), write the stats record, finalise."""
         if self.error is not None:
             return  # the file was closed unfinalised at the error
         try:
-            if self.error is None:
-                self.log.add_metadata(STATS_METADATA, self.stats().as_metadata())
-        except Exception as exc:
-            self.error = self.error or exc
-        try:
+            self.log.flush(self.fsync)
+            self.written = self.base_written + self.log.confirmed_messages
+            self.log.add_metadata(STATS_METADATA, self.stats().as_metadata())
             self.log.close()
+            self.written = self.base_written + self.log.confirmed_messages
         except Exception as exc:
-            self.error = self.error or exc
             _log.error("MCAP log could not be finalised: %s", exc)
+            self._fail(exc)
 
     def stop(self, timeout_s: float | None) -> bool:
         """Stop accepting, drain, finalise; True if the thread finished within ``timeout_s``."""
@@ -286,6 +328,25 @@ class _Pump:
         elif self.thread.ident is None:  # never started
             self._finish()
         return not self.thread.is_alive()
+
+
+def _on_disk(log: AnyLog) -> dict[str, int]:
+    """Messages per topic a recovery of ``log``'s file finds: the confirmed ones, plus those in complete
+    chunks after the confirmed point (read back from the file)."""
+    d = log.durable
+    counts = dict(d.counts)
+    if d.path is None or d.complete:
+        return counts
+    try:
+        after = recoverable_messages(d.path, d.offset)
+    except (McapReadError, OSError, ValueError) as exc:
+        _log.warning("MCAP log %s: could not read back what reached the disk (%s)", d.path, exc)
+        return counts
+    for cid, n in after.items():
+        topic = d.channels.get(cid)
+        if topic is not None:
+            counts[topic] = counts.get(topic, 0) + n
+    return counts
 
 
 class BackgroundMcapLog:

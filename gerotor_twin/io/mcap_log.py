@@ -48,7 +48,7 @@ from gerotor_twin.io.schemas import SCHEMA_ENCODING, message_definition, normali
 __all__ = [
     "PROFILE", "MESSAGE_ENCODING", "LIBRARY", "COMPRESSIONS",
     "PUMP_CONFIG_METADATA", "NODE_PARAMETERS_METADATA", "twin_log_metadata",
-    "McapLogClosed", "McapLog", "RotatingMcapLog",
+    "McapLogClosed", "McapLog", "RotatingMcapLog", "Durable",
 ]
 
 #: Metadata record names used by the project (values: ``{"yaml": <file text>}`` for the
@@ -82,6 +82,7 @@ COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none"
 
 _U64 = 2**64
 _U32 = 2**32
+_MAGIC_SIZE = 8     # b"\x89MCAP0\r\n": the first record starts after it [bytes]
 # Message record overhead in a chunk: opcode 1, length 8, channel 2, sequence 4,
 # log/publish time 16; plus its message-index entry (16).
 _MESSAGE_OVERHEAD = 47
@@ -119,6 +120,41 @@ class _Topic:
     channel_id: int
     sequence: int = 0
     type_hash: str = ""
+
+
+@dataclass(frozen=True)
+class Durable:
+    """What a log is known to hold on disk: its last confirmed point.
+
+    Messages are confirmed when the chunk holding them has been handed to the
+    OS (the stream flushed after the chunk, or the file finalised).  After a
+    write error (disk full) the file may hold more: complete chunks after
+    ``offset``, which :func:`gerotor_twin.io.recover.recoverable_messages` counts.
+
+    Attributes
+    ----------
+    path : Path or None
+        The file (None for a stream).
+    offset : int
+        Bytes of the file known to be written; the first byte of a record [bytes].
+    counts : dict[str, int]
+        Messages per topic before ``offset`` [-].
+    channels : dict[int, str]
+        Channel id -> topic, to read further counts by channel.
+    complete : bool
+        The file was finalised: ``counts`` are all its messages, nothing to read back.
+    """
+
+    path: Path | None
+    offset: int
+    counts: dict[str, int]
+    channels: dict[int, str]
+    complete: bool = False
+
+    @functools.cached_property
+    def messages(self) -> int:
+        """All messages before ``offset`` [-]."""
+        return sum(self.counts.values())
 
 
 def _bag_metadata(name: str, compression: str, topics: dict[str, _Topic], counts: dict[str, int],
@@ -263,8 +299,10 @@ class McapLog:
         self._schema_ids: dict[str, int] = {}
         self._tell = self._safe_tell()
         self._unflushed = 0
+        self._durable = Durable(self._path, _MAGIC_SIZE, {}, {})    # what is known to be in the file
         with self._sink.guard() as w:
             w.start(profile=PROFILE, library=library)
+            self._tell = self._safe_tell()      # magic and header: not a chunk
         for mname, data in (metadata or {}).items():
             self.add_metadata(mname, data)
 
@@ -310,6 +348,8 @@ class McapLog:
             self._topics[topic] = _Topic(definition.msgtype, qos_yaml, channel_id,
                                          type_hash=definition.type_hash)
             self._counts[topic] = 0
+            if self._safe_tell() != self._tell:     # the records filled a chunk: it went to the stream
+                self._chunk_written()
         return channel_id
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
@@ -319,6 +359,7 @@ class McapLog:
         data = _check_str_map(f"metadata[{name!r}]", data)
         with self._sink.guard() as w:
             w.add_metadata(name, data)
+            self._tell = self._safe_tell()      # a record beside the open chunk, which stays open
 
     # -- messages -------------------------------------------------------------------------
     def msgtype_of(self, topic: str) -> str:
@@ -378,9 +419,8 @@ class McapLog:
             span = self._span
             span[0] = log_ns if span[0] is None else min(span[0], log_ns)
             span[1] = log_ns if span[1] is None else max(span[1], log_ns)
-            tell = self._safe_tell()
-            if tell != self._tell:  # a chunk (with this message) went to the stream
-                self._tell, self._unflushed = tell, 0
+            if self._safe_tell() != self._tell:  # a chunk (with this message) went to the stream
+                self._chunk_written()
             else:
                 self._unflushed += len(payload) + _MESSAGE_OVERHEAD
 
@@ -395,9 +435,9 @@ class McapLog:
         """
         with self._sink.guard() as w:
             w.flush()
-            self._tell, self._unflushed = self._safe_tell(), 0
             if fsync and self._sink.own_stream:
                 os.fsync(self._stream.fileno())
+            self._confirm()
 
     def abandon(self) -> None:
         """Close without finalising, after a write error (e.g. disk full); idempotent.
@@ -422,6 +462,9 @@ class McapLog:
         """
         self._finalizer()  # runs _sink.close() once and drops the at-exit hook
         self._sink.close()  # no-op unless already closed or deferred
+        if self._sink.closed and not self._sink.abandoned:      # finalised: every message is in the file
+            self._durable = Durable(self._path, self._durable.offset, dict(self._counts),
+                                    self._durable.channels, complete=True)
 
     def __enter__(self) -> "McapLog":
         return self
@@ -465,6 +508,27 @@ class McapLog:
     def size_estimate(self) -> int:
         """Bytes in the file plus the (uncompressed) chunk still in memory [bytes]."""
         return self._tell + self._unflushed
+
+    @property
+    def durable(self) -> "Durable":
+        """What is known to be in the file (written to the OS): see :class:`Durable`."""
+        return self._durable
+
+    @property
+    def confirmed_messages(self) -> int:
+        """Messages known to be in the file (:attr:`durable`; the open chunk is not) [-]."""
+        return self._durable.messages
+
+    def _chunk_written(self) -> None:
+        """A chunk went to the stream: hand it to the OS and count its messages as in the file."""
+        self._stream.flush()
+        self._confirm()
+
+    def _confirm(self) -> None:
+        """Everything so far has reached the OS (after a successful flush): move :attr:`durable` here."""
+        self._tell, self._unflushed = self._safe_tell(), 0
+        self._durable = Durable(self._path, self._tell, dict(self._counts),
+                                {t.channel_id: k for k, t in self._topics.items()})
 
     def _topic(self, topic: str) -> _Topic:
         t = self._topics.get(topic)
@@ -545,6 +609,7 @@ class RotatingMcapLog:
         self._metadata: list[tuple[str, dict[str, str]]] = []
         self._paths: list[Path] = []
         self._counts: dict[str, int] = {}
+        self._done: dict[str, int] = {}      # messages per topic of the files closed (finalised) so far
         self._lock = threading.RLock()
         self._current: list[McapLog] = [self._open(0)]
         # One at-exit/GC hook for whichever file is current (created before any wrapper's hook,
@@ -578,7 +643,9 @@ class RotatingMcapLog:
             for k, v in log.message_counts.items():
                 self._counts[k] = self._counts.get(k, 0) + v
             log.close()
-            self._current[0] = self._open(len(self._paths))
+            new = self._open(len(self._paths))
+            self._done = _merged(self._done, log.durable.counts)
+            self._current[0] = new
 
     def add_topic(self, topic: str, msgtype: str, qos: QosSpec = "reliable") -> int:
         """See :meth:`McapLog.add_topic`; the topic is re-registered in every later file."""
@@ -660,3 +727,22 @@ class RotatingMcapLog:
     @property
     def message_count(self) -> int:
         return sum(self.message_counts.values())
+
+    @property
+    def durable(self) -> Durable:
+        """As :attr:`McapLog.durable` for the file being written, with the counts of the closed files added."""
+        cur = self._log.durable
+        return Durable(cur.path, cur.offset, _merged(self._done, cur.counts), cur.channels, cur.complete)
+
+    @property
+    def confirmed_messages(self) -> int:
+        """Messages known to be on disk over all files [-]."""
+        return sum(self._done.values()) + self._log.confirmed_messages
+
+
+def _merged(a: dict[str, int], b: dict[str, int]) -> dict[str, int]:
+    """Per-topic counts added."""
+    out = dict(a)
+    for k, v in b.items():
+        out[k] = out.get(k, 0) + v
+    return out

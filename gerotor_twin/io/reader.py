@@ -179,16 +179,17 @@ class McapFile:
 
 
 def _records(opener: Callable[[], IO[bytes]], path: Path | str, size: int,
-             stop_at: int | None = None) -> Iterator[tuple[int, Any]]:
+             stop_at: int | None = None, start: int | None = None) -> Iterator[tuple[int, Any]]:
     """Top-level records of the data section as ``(offset, record)``; Chunks not expanded.
 
+    Starts after the magic, or at byte ``start`` (the first byte of a record).
     Stops after DataEnd / Footer.  Raises :class:`_Truncated` where a record
     runs past the end of the file, :class:`McapReadError` for a record that is
     complete but cannot be parsed.
     """
     with opener() as f:
-        f.seek(len(_MAGIC))
-        pos = len(_MAGIC)
+        pos = len(_MAGIC) if start is None else max(len(_MAGIC), int(start))
+        f.seek(pos)
         while True:
             if stop_at is not None and pos >= stop_at:
                 return

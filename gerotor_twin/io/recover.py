@@ -37,7 +37,7 @@ from gerotor_twin.io.reader import McapReadError, _records, _source, _Truncated
 from gerotor_twin.io.rosbag2_meta import ROSBAG2_METADATA, TopicCount, rosbag2_record
 
 __all__ = ["RecoveryReport", "recover", "recovered_path", "is_finalised", "is_locked",
-           "unfinalised_logs", "recover_directory"]
+           "unfinalised_logs", "recover_directory", "recoverable_messages"]
 
 RECOVERED_SUFFIX = ".recovered.mcap"
 _FOOTER_TAIL = 1 + 8 + 8 + 8 + 4 + 8   # footer opcode, length, 2 offsets, CRC, closing magic
@@ -203,11 +203,12 @@ class _Copy:
         self.writer.finish()
 
 
-def _scan(opener, path, size) -> Iterator[tuple[str, Any]]:
-    """``("record", rec)`` for each valid record (chunks expanded), then ``("end", (offset, why))``."""
+def _scan(opener, path, size, start: int | None = None) -> Iterator[tuple[str, Any]]:
+    """``("record", rec)`` for each valid record (chunks expanded) from byte ``start`` (default: the first
+    record), then ``("end", (offset, why))``."""
     offset = 8
     try:
-        for offset, rec in _records(opener, path, size):
+        for offset, rec in _records(opener, path, size, start=start):
             if isinstance(rec, Chunk):
                 try:
                     inner = breakup_chunk(rec, validate_crc=True)
@@ -225,6 +226,26 @@ def _scan(opener, path, size) -> Iterator[tuple[str, Any]]:
                                                  f"of the file ({size} bytes): cut while being written")
     except McapReadError as exc:
         yield "end", (offset, exc.what)
+
+
+def recoverable_messages(path: str | os.PathLike[str], start: int = 8) -> dict[int, int]:
+    """Messages :func:`recover` would find in ``path`` from byte ``start`` on, per channel id.
+
+    ``start`` must be the first byte of a record (e.g. where a writer's last
+    successful flush ended).  The writer uses it after a write error to count
+    as written exactly what a recovery of the file will hold.
+
+    Raises
+    ------
+    McapReadError
+        Missing, empty or not an MCAP file.
+    """
+    name, opener, size = _source(Path(path))
+    counts: dict[int, int] = {}
+    for kind, item in _scan(opener, name, size, start):
+        if kind == "record" and isinstance(item, Message):
+            counts[item.channel_id] = counts.get(item.channel_id, 0) + 1
+    return counts
 
 
 def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | None = None, *,

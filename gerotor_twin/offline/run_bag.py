@@ -81,6 +81,21 @@ def _require_prediction(core: TwinCore, t_last: int, n_in: int, output) -> None:
                                 "The inputs were written to the output, no prediction")
 
 
+def _refuse_input_as_output(bag, output) -> None:
+    """``-o`` must not be the bag itself (resolved paths, symlinks and hard links included): writing
+    the output would replace the recording being read."""
+    if not isinstance(output, (str, Path)) or not isinstance(bag, (str, Path)):
+        return
+    out, src = Path(output), Path(bag)
+    try:
+        same = out.resolve() == src.resolve() or (out.exists() and src.exists() and out.samefile(src))
+    except OSError:
+        return                                  # unreadable paths: opening them reports it
+    if same:
+        raise InputError("-o", str(output), "a file other than the input bag",
+                         f"it is the input recording {bag}; writing it would replace the recording")
+
+
 def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings: TwinSettings | None = None,
             overwrite: bool = False, progress: IO[str] | None = sys.stderr, health=None) -> dict:
     """Run the twin core over a bench bag and write the node's topics to ``output``.
@@ -114,10 +129,11 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
         messages; or inputs the twin cannot use (the model never started: every
         sample rejected, ...; the output is written, with the inputs).
     InputError
-        Bad model name or settings.
+        Bad model name or settings; ``output`` is the bag itself.
     """
     if model not in BEARING_MODELS:
         raise InputError("--model", model, " | ".join(BEARING_MODELS))
+    _refuse_input_as_output(bag, output)
     f = open_mcap(bag)
     kinds = _topic_kinds(f.topic_types(), f.path)
     rows = []
@@ -187,6 +203,7 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
 
 def cmd_run_bag(args) -> int:
     out = Path(args.output)
+    _refuse_input_as_output(args.bag, out)
     if out.exists() and not args.overwrite:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))

@@ -25,10 +25,12 @@ What it does
       published or logged before the clock is valid (``use_sim_time``: before the
       first ``/clock``); a ``/clock`` that stops is reported on ``/diagnostics`` by a
       wall-clock (steady) timer (``clock stalled``, WARN, stamped with the last
-      clock time);
+      clock time) and once per stall on the console (WARN);
     * more than one publisher on an input topic: the first source is followed
       (:mod:`gerotor_twin.twin.sources`), the publishers (graph names, GIDs) are
-      listed and WARNed on ``/diagnostics``;
+      listed and WARNed on ``/diagnostics``; a publisher of another type on an
+      input topic is named with its type and the expected one (WARN on the
+      console, once, and on ``/diagnostics``);
     * the MCAP log and its policy (files, decimation, crash recovery at start,
       disk full): :mod:`gerotor_twin.ros.node_log`;
     * threads (docs/node.md has the measurements behind this): the receiving
@@ -82,7 +84,7 @@ from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata 
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
-__all__ = ["TwinNode", "main"]
+__all__ = ["TwinNode", "main", "wrong_type_text"]
 
 _MSG_CLASSES = {
     m.JOINT_STATE: ("sensor_msgs.msg", "JointState"), m.FLUID_PRESSURE: ("sensor_msgs.msg", "FluidPressure"),
@@ -102,15 +104,18 @@ def _msg_class(msgtype: str):
 class TwinNode(Node):
     """The digital-twin node; see the module docstring."""
 
-    def __init__(self, param_values: dict | None = None, **kwargs):
+    def __init__(self, param_values: dict | None = None, param_warnings: list[str] | None = None, **kwargs):
         super().__init__("twin_node", **kwargs)
         from gerotor_twin.config import default_config_path, load_config
         from gerotor_twin.model.pump import Inputs, PumpModel
 
         self.prm = P.declare(self, param_values)
+        self.start_warnings: list[str] = []      # params-file sections not applied, config notes (WARN)
+        for text in param_warnings or ():
+            self._start_warning(text)
         prm = self.prm
         cfg_path = prm["pump_config"] or str(default_config_path())
-        self.config = load_config(cfg_path)
+        self.config = load_config(cfg_path, "pump_config", warn=self._start_warning)
         self.config_text = Path(cfg_path).read_text()
         self.model = PumpModel(self.config, prm["bearing_model"])
         self.settings = P.twin_settings(prm)
@@ -162,6 +167,11 @@ class TwinNode(Node):
             f"log {self.log.log.path if self.log else 'off'}")
 
     # ---------------------------------------------------------------- set-up
+    def _start_warning(self, text: str) -> None:
+        """A problem found at start that does not stop the node: WARN now and on every /diagnostics."""
+        self.start_warnings.append(text)
+        self.get_logger().warning(text)
+
     def _warm_up(self, Inputs) -> None:
         """Compile / load the JIT kernels now, not in the first tick."""
         inp = Inputs(100.0, self.config.boundary.suction_pressure_pa, self.config.boundary.suction_pressure_pa)
@@ -206,6 +216,7 @@ class TwinNode(Node):
             raise InputError("GEROTOR_TWIN_INPUT_NODE", "0", "1 with GEROTOR_TWIN_EXECUTOR=waitset")
         self.received = dict.fromkeys(INPUTS, 0)
         self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
+        self._wrong_type_said: set[str] = set()          # wrong-type publishers already logged
         self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
         self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
         self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
@@ -379,12 +390,19 @@ class TwinNode(Node):
             if self.stopping:
                 return
             now = self.get_clock().now().nanoseconds
-            if self.clock_watch.update(now, time.monotonic()).status == "stalled":
+            if self._watch_update(now).status == "stalled":
                 self._diagnostics(now)
+
+    def _watch_update(self, now: int):
+        """The clock watch at ``now``; a stall that begins is said once on the console (WARN)."""
+        clock = self.clock_watch.update(now, time.monotonic())
+        if clock.started:
+            self.get_logger().warning(f"{clock.describe()} (clock_stall_s = {self.prm['clock_stall_s']:g} s)")
+        return clock
 
     def _diagnostics(self, now: int) -> None:
         """Publish (and log when due) /diagnostics stamped ``now``; caller holds ``_step_lock``."""
-        clock = self.clock_watch.update(now, time.monotonic())
+        clock = self._watch_update(now)
         if clock.status == "waiting" or not self._clock_valid(now):
             return                               # no valid time to stamp it with yet (sim time before /clock)
         self._next_diag = (now // self._diag_ns + 1) * self._diag_ns
@@ -403,9 +421,14 @@ class TwinNode(Node):
                   "model_inbox_dropped": self.inbox.dropped}
         level = m.DIAG_WARN if self.callback_errors else m.DIAG_OK
         msg = "ok"
-        many = self._input_publishers(values)
+        if self.start_warnings:
+            values["start_warnings"] = clip(" | ".join(self.start_warnings), 1200)
+            level, msg = m.DIAG_WARN, clip(self.start_warnings[0], 600)
+        many, wrong = self._input_publishers(values)
         if many:
             level, msg = m.DIAG_WARN, "more than one publisher on " + "; ".join(many)
+        if wrong:
+            level, msg = m.DIAG_WARN, "; ".join(wrong)
         if clock is not None:
             values.update({"clock_status": clock.status, "clock_unchanged_s": round(clock.unchanged_s, 3),
                            "clock_stalls": self.clock_watch.stalls})
@@ -417,25 +440,41 @@ class TwinNode(Node):
             level, msg = log_level, log_msg
         return m.diagnostic_status(level, "gerotor_twin: node", msg, hardware_id="gerotor_twin", values=values)
 
-    def _input_publishers(self, values: dict) -> list[str]:
-        """Publishers of each input topic from the ROS graph into ``values``; topics with more than one."""
-        many = []
+    def _input_publishers(self, values: dict) -> tuple[list[str], list[str]]:
+        """Publishers of each input topic from the ROS graph into ``values``.
+
+        Returns the topics with more than one publisher of the input's type, and one text per
+        publisher of another type (DDS never delivers its messages: the input only looks stale),
+        each said once on the console (WARN).
+        """
+        many, wrong = [], []
         for kind, sub in self.subs.items():
             try:
                 infos = self.get_publishers_info_by_topic(sub.topic_name)
             except Exception:  # noqa: BLE001 - graph query during shutdown
                 continue
-            names = [f"{i.node_namespace.rstrip('/')}/{i.node_name} (gid {bytes(i.endpoint_gid)[:8].hex()})"
-                     for i in infos]
+            expected = INPUTS[kind].msgtype
+            names = [_publisher_name(i) for i in infos if i.topic_type == expected]
             values[f"publishers.{kind}"] = clip(f"{len(names)}: {', '.join(names)}", 300)
             if len(names) > 1:
                 many.append(clip(f"{sub.topic_name} ({', '.join(names)})", 200))
-        return many
+            text = wrong_type_text(sub.topic_name, expected, [(i.topic_type, _publisher_name(i)) for i in infos])
+            if text:
+                wrong.append(text)
+                values[f"wrong_type_publishers.{kind}"] = text
+                if text not in self._wrong_type_said:
+                    self._wrong_type_said.add(text)
+                    self.get_logger().warning(text)
+        return many, wrong
 
     # -------------------------------------------------------------- shutdown
     def _log_drops(self, log) -> dict[str, int]:
-        """Inputs received but not logged, per topic: writer queue full or refused by ``write_raw``."""
-        out = dict(log.stats().dropped_queue_full)
+        """Inputs received but not logged, per topic: writer queue full, not on disk after a write error
+        (disk full), or refused by ``write_raw``."""
+        st = log.stats()
+        out = dict(st.dropped_queue_full)
+        for topic, n in st.lost_by_topic.items():
+            out[topic] = out.get(topic, 0) + n
         for kind, n in self.log_refused.items():
             if n and kind in self.subs:
                 out[self.subs[kind].topic_name] = out.get(self.subs[kind].topic_name, 0) + n
@@ -451,6 +490,34 @@ class TwinNode(Node):
                     {k: s.topic_name for k, s in self.subs.items()}, self.inbox.dropped))
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
+
+
+def _publisher_name(info) -> str:
+    """``/ns/node (gid 0123abcd...)`` of a graph endpoint."""
+    return f"{info.node_namespace.rstrip('/')}/{info.node_name} (gid {bytes(info.endpoint_gid)[:8].hex()})"
+
+
+def wrong_type_text(topic: str, expected: str, publishers: list[tuple[str, str]]) -> str:
+    """One line naming the publishers of ``topic`` whose type is not ``expected``; '' if none.
+
+    Parameters
+    ----------
+    topic : str
+        The input topic (as subscribed).
+    expected : str
+        The input's type, ``pkg/msg/Type``.
+    publishers : list of (type, name)
+        Every publisher of the topic in the ROS graph.
+    """
+    by_type: dict[str, list[str]] = {}
+    for msgtype, name in publishers:
+        if msgtype != expected:
+            by_type.setdefault(msgtype, []).append(name)
+    if not by_type:
+        return ""
+    parts = [f"{t} by {', '.join(n)}" for t, n in sorted(by_type.items())]
+    return clip(f"{topic.lstrip('/')} is published as {'; as '.join(parts)}; expected {expected} "
+                "(its messages never reach the node)", 400)
 
 
 def _name_os_thread(name: bytes) -> None:
@@ -523,16 +590,18 @@ def _rclpy_executor(kind: str):
     return SingleThreadedExecutor()
 
 
-def _validated_parameters(args: list[str]) -> dict | None:
-    """Every parameter the command line gives (params files and ``-p``), validated; None after printing why.
+def _validated_parameters(args: list[str]) -> tuple[dict, list[str]] | None:
+    """Every parameter the command line gives (params files and ``-p``), validated, and the warnings about
+    params-file sections that do not apply to this node; None after printing why.
 
     Done before ``rclpy.init`` so a missing or malformed params file, an
     unknown name or a bad value is one line and exit 2 (rcl would print a
     traceback or silently drop it, see :mod:`gerotor_twin.ros.param_args`).
     """
-    from gerotor_twin.ros.param_args import overrides_from_args
+    from gerotor_twin.ros.param_args import overrides_from_args, unapplied_sections
     try:
-        return P.check_overrides(overrides_from_args(list(args), "twin_node"))
+        return (P.check_overrides(overrides_from_args(list(args), "twin_node")),
+                unapplied_sections(list(args), "twin_node"))
     except InputError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return None
@@ -541,9 +610,10 @@ def _validated_parameters(args: list[str]) -> dict | None:
 def main(argv=None) -> int:
     """Console entry point ``twin_node`` (also ``ros2 run gerotor_twin twin_node``)."""
     args = sys.argv if argv is None else argv
-    param_values = _validated_parameters(args)
-    if param_values is None:
+    validated = _validated_parameters(args)
+    if validated is None:
         return 2
+    param_values, param_warnings = validated
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:  # noqa: BLE001 - rcl refused the command line (RCLError): one line, exit 2
@@ -569,7 +639,7 @@ def main(argv=None) -> int:
     main_spin = None
     try:
         try:
-            node = TwinNode(param_values)
+            node = TwinNode(param_values, param_warnings)
         except Exception as exc:  # noqa: BLE001 - one line for the user, exit 2
             from rclpy.exceptions import InvalidParameterValueException, ParameterException
             if isinstance(exc, (InputError, InvalidParameterValueException, ParameterException, OSError)):

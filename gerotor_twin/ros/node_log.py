@@ -49,6 +49,12 @@ def log_directory(value: str) -> Path:
     return Path(expanded).expanduser()
 
 
+def _os_reason(exc: OSError) -> str:
+    """``[Errno 30] Read-only file system: '/x'`` as ``read-only file system: /x``."""
+    why = (exc.strerror or type(exc).__name__).lower()
+    return f"{why}: {exc.filename}" if exc.filename else why
+
+
 class NodeLogFiles:
     """Log policy of one node run.
 
@@ -88,11 +94,16 @@ class NodeLogFiles:
         from gerotor_twin.io import BackgroundMcapLog
         from gerotor_twin.io.background import Reopen
         directory = log_directory(prm["log_dir"])
-        directory.mkdir(parents=True, exist_ok=True)
-        self.recover_crashed(directory)
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            self.recover_crashed(directory)
+            first = self.new_file(directory)
+        except OSError as exc:          # read-only, no permission, a file in the way, disk full...
+            raise InputError("log_dir", prm["log_dir"], "a directory this process can create and write "
+                             "files in ('' = no log)", _os_reason(exc)) from None
         reopen = Reopen(lambda: self.new_file(directory), directory, int(prm["log_min_free_mb"] * 1e6),
                         prm["log_retry_s"])
-        log = BackgroundMcapLog(self.new_file(directory), max_queue=prm["log_queue"],
+        log = BackgroundMcapLog(first, max_queue=prm["log_queue"],
                                 flush_interval_s=prm["log_flush_s"], fsync=prm["log_fsync"], reopen=reopen)
         for topic, msgtype, qos in topics:
             log.add_topic(topic, msgtype, qos=qos)

@@ -16,17 +16,22 @@ Node-name rules follow rcl: a params-file section applies when its key
 (``/**``, ``twin_node``, ``/ns/twin_node``, with ``*`` = one name token and
 ``**`` = any number) matches the node's fully qualified name; nested maps
 give dotted parameter names; ``-p node:name:=value`` applies to that node only.
+A section that does not apply but looks written for the node (a mistyped node
+name) is named by :func:`unapplied_sections`: the node warns, since rcl skips it
+silently.
 """
 from __future__ import annotations
 
+import difflib
 import re
 from dataclasses import dataclass
 from typing import Any
 
-from gerotor_twin.errors import InputError
+from gerotor_twin.errors import MAX_ERROR_CHARS, InputError, clip
 from gerotor_twin.yaml_safe import load_yaml, load_yaml_file
 
-__all__ = ["Override", "RosArgs", "parse_ros_args", "overrides_from_args", "params_from_file"]
+__all__ = ["Override", "RosArgs", "parse_ros_args", "overrides_from_args", "params_from_file", "file_sections",
+           "unapplied_sections"]
 
 _WITH_VALUE = {"--params-file", "-p", "--param", "-r", "--remap", "--log-level", "--log-config-file",
                "-e", "--enclave", "--log-file-name"}
@@ -99,8 +104,11 @@ def _flatten(prefix: str, node: Any, out: dict[str, Any]) -> None:
             out[name] = v
 
 
-def params_from_file(path: str, node_fqn: str) -> dict[str, Any]:
-    """Parameters a params file gives the node ``node_fqn`` (``/twin_node``), in file order.
+def file_sections(path: str) -> list[tuple[str, dict[str, Any]]]:
+    """The ``ros__parameters`` sections of a params file: ``(node-name key, {name: value})`` in file order.
+
+    The key is as written (``twin_node``, ``/ns/twin_node``, ``/**``; ``""`` for a
+    top-level ``ros__parameters``); nested maps give dotted names.
 
     Raises
     ------
@@ -111,7 +119,7 @@ def params_from_file(path: str, node_fqn: str) -> dict[str, Any]:
     what = f"--params-file {path}"
     if not isinstance(doc, dict):
         raise InputError(what, type(doc).__name__, "a mapping of node names to {ros__parameters: {...}}")
-    out: dict[str, Any] = {}
+    out: list[tuple[str, dict[str, Any]]] = []
 
     def walk(prefix: str, node: Any) -> None:
         if not isinstance(node, dict):
@@ -120,13 +128,41 @@ def params_from_file(path: str, node_fqn: str) -> dict[str, Any]:
             if k == "ros__parameters":
                 if not isinstance(v, dict):
                     raise InputError(f"{what}: {prefix}.ros__parameters", v, "a mapping of parameter values")
-                if _key_regex(prefix or "/").match(node_fqn):
-                    _flatten("", v, out)
+                flat: dict[str, Any] = {}
+                _flatten("", v, flat)
+                out.append((prefix, flat))
             else:
                 walk(f"{prefix}/{str(k).strip('/')}" if prefix else str(k), v)
 
     walk("", doc)
     return out
+
+
+def _applies(key: str, node_fqn: str) -> bool:
+    """Does the section ``key`` apply to the node ``node_fqn`` (rcl's matching)?"""
+    return bool(_key_regex(key or "/").match(node_fqn))
+
+
+def params_from_file(path: str, node_fqn: str) -> dict[str, Any]:
+    """Parameters a params file gives the node ``node_fqn`` (``/twin_node``), in file order.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable or malformed file, or a section without ``ros__parameters``.
+    """
+    out: dict[str, Any] = {}
+    for key, params in file_sections(path):
+        if _applies(key, node_fqn):
+            out.update(params)
+    return out
+
+
+def _node_fqn(ra: RosArgs, node_name: str, namespace: str) -> tuple[str, str]:
+    """The node's (name, fully qualified name) after ``-r __node:=`` / ``__ns:=`` remaps."""
+    name = ra.node_name or node_name
+    ns = (ra.namespace or namespace or "/").rstrip("/")
+    return name, f"{ns}/{name}" if ns.startswith("/") else f"/{ns}/{name}" if ns else f"/{name}"
 
 
 def overrides_from_args(argv: list[str], node_name: str, namespace: str = "/") -> dict[str, Override]:
@@ -136,9 +172,7 @@ def overrides_from_args(argv: list[str], node_name: str, namespace: str = "/") -
     ``200.0`` double, ``true`` bool, anything else a string).
     """
     ra = parse_ros_args(argv)
-    name = ra.node_name or node_name
-    ns = (ra.namespace or namespace or "/").rstrip("/")
-    fqn = f"{ns}/{name}" if ns.startswith("/") else f"/{ns}/{name}" if ns else f"/{name}"
+    _, fqn = _node_fqn(ra, node_name, namespace)
     out: dict[str, Override] = {}
     for path in ra.params_files:
         for k, v in params_from_file(path, fqn).items():
@@ -151,3 +185,63 @@ def overrides_from_args(argv: list[str], node_name: str, namespace: str = "/") -
                           aliases=False) if text.strip() else ""
         out[pname] = Override(pname, value, "-p")
     return out
+
+
+def unapplied_sections(argv: list[str], node_name: str, namespace: str = "/") -> list[str]:
+    """Warnings, one line each, for params-file sections that do not apply to this node but look meant for it.
+
+    rcl silently skips a section whose node name does not match (``twin_nod:``
+    for ``twin_node``), so a typo in the name runs the node on its defaults.
+    A section that does not apply is named when its last name token is close
+    to the node's name (``difflib`` ratio >= 0.8) or more than half of its keys
+    are parameters of the node (``use_sim_time`` and the like not counted);
+    its keys are checked as the node would check them (unknown names, values
+    it would refuse).  A file none of whose sections applies is named too, and
+    so is a ``-p node:name:=value`` whose node part looks meant for the node.
+    Files are read with :func:`file_sections` (errors as there).
+    """
+    ra = parse_ros_args(argv)
+    name, fqn = _node_fqn(ra, node_name, namespace)
+    out = []
+    for path in ra.params_files:
+        sections = file_sections(path)
+        expected = f"sections that apply: {name}, {fqn}, /**"
+        meant = [(k, p) for k, p in sections if not _applies(k, fqn) and _looks_meant(k, p, name)]
+        for key, params in meant:
+            out.append(clip(f"--params-file {path}: section '{key}' is not applied: it does not match this "
+                            f"node's name {fqn} ({expected}); {_describe_keys(params, name)}", MAX_ERROR_CHARS))
+        if sections and not meant and not any(_applies(k, fqn) for k, _ in sections):
+            out.append(clip(f"--params-file {path} gives {fqn} no parameters: its sections are "
+                            f"{', '.join(repr(k) for k, _ in sections)} ({expected})", MAX_ERROR_CHARS))
+    for key, text in ra.params:                 # -p twin_nod:log_dir:=... is skipped the same way
+        target, _, pname = key.rpartition(":")
+        if target and not _key_regex(target).match(fqn) and _looks_meant(target, {pname: text}, name):
+            out.append(clip(f"-p {key}:={text} is not applied: {target} does not match this node's name {fqn} "
+                            f"(use -p {pname}:=... or -p {name}:{pname}:=...)", MAX_ERROR_CHARS))
+    return out
+
+
+def _looks_meant(key: str, params: dict[str, Any], node_name: str) -> bool:
+    """A section probably written for ``node_name``: a close name, or mostly its parameters."""
+    from gerotor_twin.ros.params import BUILTIN, PARAMETERS
+    last = key.rstrip("/").rsplit("/", 1)[-1]
+    if difflib.SequenceMatcher(None, last, node_name).ratio() >= 0.8:
+        return True
+    own = {p.name for p in PARAMETERS}
+    keys = [k for k in params if k not in BUILTIN]
+    return 2 * sum(k in own for k in keys) > len(keys)
+
+
+def _describe_keys(params: dict[str, Any], node_name: str) -> str:
+    """``its parameters are ignored: a, b (...)`` with the keys checked as the node would (first problem)."""
+    from gerotor_twin.ros.params import check_value
+    problems = []
+    for k, v in params.items():
+        try:
+            check_value(k, v)
+        except InputError as exc:
+            problems.append(str(exc))
+    text = f"its {len(params)} parameter(s) are ignored: {', '.join(params) or '(none)'}"
+    if problems:
+        text += f"; {len(problems)} of them would be refused too, e.g. {problems[0]}"
+    return text

@@ -6,7 +6,8 @@ simulator), nothing is integrated or published and a ROS-time timer would not
 fire either.  The node therefore runs ``/diagnostics`` on a wall-clock
 (steady) timer and asks :class:`ClockWatch`, at each report, whether the
 clock moved: unchanged for longer than ``stall_after_s`` of wall time is
-``stalled`` (WARN on ``/diagnostics``, stamped with the last clock time),
+``stalled`` (WARN on ``/diagnostics``, stamped with the last clock time, and
+once per stall on the console: :attr:`ClockState.started`),
 a clock of 0 is ``waiting`` (no ``/clock`` yet).  Pure Python: the caller
 passes both times.
 """
@@ -23,6 +24,7 @@ class ClockState:
     status: str                 #: ``ok`` | ``waiting`` (clock 0) | ``stalled``
     unchanged_s: float          #: wall time since the clock last moved [s]
     clock_ns: int               #: the clock's value [ns]
+    started: bool = False       #: this update found the stall (once per stall: the caller logs it then)
 
     def describe(self) -> str:
         if self.status == "waiting":
@@ -59,7 +61,8 @@ class ClockWatch:
         if clock_ns == 0:
             return ClockState("waiting", unchanged, 0)
         if unchanged > self.stall_after_s:
-            self.stalls += not self._in_stall
+            started = not self._in_stall
+            self.stalls += started
             self._in_stall = True
-            return ClockState("stalled", unchanged, clock_ns)
+            return ClockState("stalled", unchanged, clock_ns, started)
         return ClockState("ok", unchanged, clock_ns)
