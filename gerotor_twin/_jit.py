@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numba
 
-__all__ = ["njit", "invalidate_stale_cache", "kernel_sources", "source_digest", "typed"]
+__all__ = ["njit", "invalidate_stale_cache", "import_closure", "kernel_sources", "source_digest", "typed"]
 
 _PACKAGE = Path(__file__).resolve().parent
 _STAMP = "numba_sources.sha256"
@@ -94,35 +94,43 @@ def _imports(package: Path, f: Path) -> set[Path]:
     return out
 
 
+def import_closure(roots, package: Path | None = None) -> list[Path]:
+    """``roots`` and every module of ``package`` they import, transitively, sorted.
+
+    Read from the import statements (:mod:`ast`, imports inside functions included); nothing is
+    imported.  ``roots``: source files of the package; ``package``: its directory (default: this one).
+    """
+    package = Path(package) if package is not None else _PACKAGE
+    todo, seen = [Path(f) for f in roots], set()
+    while todo:
+        f = todo.pop()
+        if f not in seen:
+            seen.add(f)
+            todo.extend(_imports(package, f))
+    return sorted(seen)
+
+
 def kernel_sources(package: Path | None = None) -> list[Path]:
     """The source files the compiled code can depend on, sorted.
 
     The modules of ``package`` that import ``_jit`` (they define the compiled
     functions), this module, and every module of the package they import,
-    transitively.  Read from the import statements (:mod:`ast`); nothing is
-    imported.  ``package``: the package directory (default: this one).
+    transitively (:func:`import_closure`).  ``package``: the package directory (default: this one).
     """
     package = Path(package) if package is not None else _PACKAGE
     jit = package / "_jit.py"
-    files = sorted(package.rglob("*.py"))
-    graph = {f: _imports(package, f) for f in files if b"_jit" in f.read_bytes()}   # only these can import it
-    todo = [jit] + [f for f, deps in graph.items() if jit in deps]
-    seen: set[Path] = set()
-    while todo:
-        f = todo.pop()
-        if f not in seen:
-            seen.add(f)
-            if f not in graph:
-                graph[f] = _imports(package, f)
-            todo.extend(graph[f])
-    return sorted(seen)
+    users = [f for f in sorted(package.rglob("*.py")) if b"_jit" in f.read_bytes() and jit in _imports(package, f)]
+    return import_closure([jit] + users, package)
 
 
-def source_digest(package: Path | None = None) -> str:
-    """SHA-256 of the kernel sources (:func:`kernel_sources`): their paths and contents."""
+def source_digest(package: Path | None = None, files=None) -> str:
+    """SHA-256 of source files, their paths (relative to ``package``) and contents.
+
+    ``files``: the files to hash (default: the kernel sources, :func:`kernel_sources`).
+    """
     package = Path(package) if package is not None else _PACKAGE
     h = hashlib.sha256()
-    for f in kernel_sources(package):
+    for f in (kernel_sources(package) if files is None else sorted(files)):
         h.update(f.relative_to(package).as_posix().encode())
         h.update(b"\0")
         h.update(f.read_bytes())

@@ -209,7 +209,7 @@ def cmd_bench(args) -> int:
 
     if args.family is not None and args.what in ("realtime", "accuracy"):
         return _bench_family(args)
-    cfg = load_config(args.config)
+    cfg = _with_numerics(load_config(args.config), args.numerics)
     if args.what == "realtime":
         speeds = tuple(int(round(v)) for v in _floats(args.rpm or "1000,2000,3000", "--rpm"))
         if not all(0 < v <= cfg.range.max_speed_rpm for v in speeds):
@@ -223,7 +223,7 @@ def cmd_bench(args) -> int:
         from .model.accuracy import print_accuracy
         rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
                               models=tuple((args.models or "mobility").split(",")),
-                              check_reference=args.check_reference)
+                              check_reference=args.check_reference, cache=_reference_cache(args))
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
         return 0 if all(r["within_budget"] for r in rows) else 1
@@ -236,6 +236,35 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def _with_numerics(cfg, text):
+    """``cfg`` with the numerics fields of ``--numerics KEY=VALUE[,...]`` replaced (validated by
+    :class:`~gerotor_twin.config.Numerics` itself); ``text`` None: ``cfg``."""
+    import dataclasses
+    if not text:
+        return cfg
+    fields = {f.name: f.type for f in dataclasses.fields(cfg.numerics)}
+    changes = {}
+    for item in str(text).split(","):
+        key, _, value = item.partition("=")
+        key = key.strip()
+        if key not in fields or not value:
+            raise InputError("--numerics", item, f"KEY=VALUE with KEY one of {', '.join(fields)}")
+        current = getattr(cfg.numerics, key)
+        try:
+            changes[key] = type(current)(value) if not isinstance(current, str) else value.strip()
+        except ValueError:
+            raise InputError("--numerics", item, f"a {type(current).__name__} for {key}") from None
+    return dataclasses.replace(cfg, numerics=dataclasses.replace(cfg.numerics, **changes))
+
+
+def _reference_cache(args):
+    """The reference cache directory of ``bench accuracy`` (None with ``--no-reference-cache``)."""
+    if args.no_reference_cache:
+        return None
+    from .model.reference_cache import default_directory
+    return args.reference_cache or default_directory()
+
+
 def _bench_family(args) -> int:
     """``bench accuracy|realtime --family [DIR]``: every pump of the family on its own grid (model/family.py)."""
     from .model.family import family_grid, family_pumps, pressure_extremes, speed_extremes
@@ -243,12 +272,12 @@ def _bench_family(args) -> int:
     models = tuple((args.models or "mobility").split(","))
     out, ok = {}, True
     for pump in pumps:
-        cfg = pump.config
+        cfg = _with_numerics(pump.config, args.numerics)
         if args.what == "accuracy":
             from .model.accuracy import print_accuracy
             rpms, bars = family_grid(cfg)
             rows = print_accuracy(cfg, rpms=rpms, bars=bars, models=models, check_reference=args.check_reference,
-                                  label=f"{pump.name} ({pump.path})")
+                                  label=f"{pump.name} ({pump.path})", cache=_reference_cache(args))
             ok &= all(r["within_budget"] for r in rows)
             print(f"{pump.name}: {sum(r['within_budget'] for r in rows)} of {len(rows)} points within budget",
                   flush=True)
@@ -337,6 +366,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--check-reference", action="store_true",
                    help="accuracy: also show how far the reference moves against one with half its tolerance and "
                         "twice its output-step refinement (largest budget figure, as a fraction of its budget)")
+    b.add_argument("--numerics", metavar="KEY=VALUE[,...]",
+                   help="accuracy / realtime: override numerics fields of every pump (e.g. tolerance=0.02,"
+                        "rate_fraction=0), to compare step-control settings on the same references")
+    b.add_argument("--reference-cache", metavar="DIR", default=None,
+                   help="accuracy: directory of cached reference revolutions (default $GEROTOR_TWIN_CACHE/references "
+                        "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")
+    b.add_argument("--no-reference-cache", action="store_true", help="accuracy: compute every reference afresh")
     b.add_argument("--json", help="write the figures to this JSON file")
     b.set_defaults(func=cmd_bench)
 

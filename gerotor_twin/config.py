@@ -163,37 +163,38 @@ class Numerics:
     """Table resolution, output step (shaft angle [deg], time [s]) and sub-step error control.
 
     ``error_measure = "pressure"`` (default): a ROS2 sub-step is accepted when in
-    every volume the error of the pressure is at most ``tolerance`` × (p_delivery −
-    p_suction, at least 1 bar) and, where the oil is compressible (β small, below
-    atmospheric pressure), the error of ln(ρ/ρ₀) at most ``log_density_tolerance``
+    every volume the error of the pressure is at most ``tolerance`` × Δp_ref, the error scale:
+    the larger of p_delivery − p_suction and the chamber pressures' range over about the last
+    revolution (highest peak − lowest sample), at least 1 bar; and, where the oil is compressible
+    (β small, below atmospheric pressure), the error of ln(ρ/ρ₀) at most ``log_density_tolerance``
     (≈ the mass error; it decides the filling, hence the volumetric efficiency).
     ``"log_density"``: the absolute error of ln(ρ/ρ₀) at most ``tolerance`` everywhere
-    (the measure of versions ≤ 0.2: 5e-5 ≈ 75 kPa in the liquid, 75 Pa below p_atm).
+    (5e-5 ≈ 75 kPa in the liquid, 75 Pa below p_atm).
     ``rate_fraction`` > 0 also caps every sub-step so that no chamber pressure moves by more than
-    about ``rate_fraction`` × (p_delivery − p_suction) in it (h ≤ rate_fraction·Δp / max_j |dp_j/dt| at
+    about ``rate_fraction`` × Δp_ref in it (h ≤ rate_fraction·Δp_ref / max_j |dp_j/dt| at
     its start): it resolves the pressure spikes of the nearly sealed chambers (default 0.3; 0: off).
     ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
     four output steps (linear extrapolation of its open area): the pressure spike of the throttled,
     compressed chamber forms there (default 0.25; 1: no change; pressure measure only).
     ``top_tolerance`` > 0 rejects a sub-step in which a chamber's pressure turns from rising to falling
     when the top it may hide (the two end tangents' crossing above the higher end) exceeds
-    ``top_tolerance`` × ``tolerance`` × (p_delivery − p_suction) (default 0.25; 0: off; pressure
-    measure only).
+    ``top_tolerance`` × ``tolerance`` × Δp_ref (default 1: the hidden top is held to the same
+    tolerance as the error estimate; 0: off; pressure measure only).
     ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
     the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
     ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
-    over the next step (the scheme before 812d007).
+    over the next step (kept for comparison, docs/numerics.md).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048
     max_step_deg: float = 1.5
     max_step_s: float = 2e-4
-    tolerance: float = 0.05
+    tolerance: float = 0.03
     error_measure: str = "pressure"
     log_density_tolerance: float = 2e-4
     rate_fraction: float = 0.3
     closing_tolerance: float = 0.25
-    top_tolerance: float = 0.25
+    top_tolerance: float = 1.0
     gear_coupling: str = "stages"
 
     def __post_init__(self):

@@ -2,7 +2,8 @@
 
 A pump file written for an older version of the package can hold a key whose
 unit or meaning has changed since (``numerics.tolerance`` was an error on
-ln ρ, about 5e-5; it is now a fraction of p_d − p_s, default a few 1e-2) or
+ln ρ, about 5e-5; it is now a fraction of the pressure scale max(p_d − p_s, 1 bar, the chamber
+pressures' range), default a few 1e-2) or
 one that is no longer used.  Neither is an error: the file still loads, and
 :func:`gerotor_twin.config.load_config` says each note once, in one line
 (the CLI on stderr, the node on its console and ``/diagnostics``).
@@ -43,8 +44,8 @@ class KeyNote:
 #: ``section.key`` -> what changed (one line).  A removed key goes here instead of being refused.
 KEY_NOTES: dict[str, KeyNote] = {
     "numerics.tolerance": KeyNote(
-        "changed", "numerics.tolerance is a fraction of p_d - p_s (error_measure: pressure, the default); in "
-                   "older pump files it was an error on ln(rho), about 5e-5: remove the key to use the default, "
+        "changed", "numerics.tolerance is a fraction of the pressure scale max(p_d - p_s, 1 bar, chamber pressure range) "
+                   "(error_measure: pressure, the default); in older pump files it was an error on ln(rho), about 5e-5: remove the key to use the default, "
                    "or set error_measure: log_density for the old meaning"),
 }
 

@@ -201,7 +201,7 @@ def test_tolerance_of_an_older_pump_file_is_named_with_its_hint(tmp_path):
     assert cfg.numerics.tolerance == 5.0e-5 and len(said) == 1 and said == [f"--config {f}: {cfg.notes[0]}"]
     assert said[0].startswith(f"--config {f}: numerics.tolerance = 5e-05 is far outside its sensible range "
                               f"[{d / 100:g}, {d * 100:g}] (default {d:g}; 100x either way); "
-                              "numerics.tolerance is a fraction of p_d - p_s"), said
+                              "numerics.tolerance is a fraction of the pressure scale"), said
     assert "ln(rho)" in said[0] and "\n" not in said[0]
     p = run_cli("geometry", "--config", str(f), "--json", str(tmp_path / "g.json"))
     assert p.returncode == 0 and f"warning: --config {f}: numerics.tolerance = 5e-05" in p.stderr, p.stderr

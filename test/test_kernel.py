@@ -174,7 +174,8 @@ def test_closing_port_share_stops_at_the_closing_angle(warm):
 
 
 def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
-    """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ);
+    """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ),
+    Δp_ref = max(p_d − p_s, 1 bar, the chamber pressures' recent range carried in the state);
     for a chamber whose delivery port is closing or has just opened (flagged by ``closing_ports``: time to
     close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.25
     in the packaged config) and β_i replaced by max(β_i, β(p_d)) (its ln ρ error counts as it
@@ -186,6 +187,9 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
     ws, n = m._ws, m.N
     c = n + 1
+    ws.ctrl[K.CT_RANGE] = s.pressure_range                  # the error scale of the state's next step
+    scale = max(inp.p_delivery - inp.p_suction, 1e5, s.pressure_range)
+    assert s.pressure_range > inp.p_delivery - inp.p_suction          # the range is the scale here
     seen = {True: 0, False: 0}
     for theta in np.linspace(s.theta, s.theta + m.tables.shift, 23):
         _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])     # closing_ports: ws.jac
@@ -201,9 +205,9 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
                 assert a > 0 and slope < 0 and tcd == pytest.approx(a / (-slope * op.omega), rel=1e-12)
             tol = pc.tolerance * (pc.closing_tolerance if closing else 1.0)
             beta = max(ws.beta[j], op.beta_d) if closing else ws.beta[j]
-            want = max(beta / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
+            want = max(beta / (tol * scale), 1.0 / pc.log_density_tolerance)
             assert ws.wt[j] == pytest.approx(want, rel=1e-12), (theta, j, closing)
-            seen[closing] += beta / (tol * op.dp_ref) > 1.0 / pc.log_density_tolerance
+            seen[closing] += beta / (tol * scale) > 1.0 / pc.log_density_tolerance
             if closing and ws.beta[j] < 0.5 * op.beta_d:                 # a just-opened chamber, still soft
                 seen["soft"] = seen.get("soft", 0) + 1
     assert seen[True] and seen[False] and seen["opened"] and seen["soft"], seen

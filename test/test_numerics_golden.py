@@ -3,9 +3,11 @@
 The references in test/golden/ are revolutions at periodic steady state of the default pump,
 mobility model, computed with tight numerics (ROS2 tolerance 1e-8 on ln(ρ/ρ₀), output step 8×
 finer; test/golden/make_reference.py, git revision in each file). The default numerics must stay
-within the error budget of issue 10 at each point: RMS chamber-pressure error ≤ 1 % of
-(p_delivery − p_suction), |η error| ≤ 0.3 % relative, |peak-pressure error| ≤ 2 %.
-A change of the default numerics (step, tolerance, error measure) that breaks it fails here.
+within the error budget (``model.accuracy.BUDGET``) at each point: RMS chamber-pressure error ≤ 1 % of
+the reference waveform's range, |η error| ≤ 0.3 % relative, |peak-pressure error| ≤ 2 % (gauge), flow
+RMS ≤ 1 %.  A change of the default numerics (step, tolerance, error measure) that breaks it fails here.
+The step-control mechanisms (``closing_tolerance``, ``rate_fraction``, ``top_tolerance``) are each shown
+necessary on pumps of the family (config/pumps/) against fresh tight references (behaviour tier).
 """
 import numpy as np
 import pytest
@@ -13,15 +15,16 @@ import pytest
 from dataclasses import replace
 
 from golden.make_reference import LOW_POINTS, POINTS, path
+from gerotor_twin.config import load_config
 from gerotor_twin.model.accuracy import BUDGET, Revolution, compare, reference_revolution
+from gerotor_twin.model.family import family_dir
 from gerotor_twin.model.pump import PumpModel
 from gerotor_twin.model.steady import run_steady
 
 
 def flow_number_law(cfg):
-    """``cfg`` with the flow-number orifice law, the default before Merritt's law (fee6c52): the pump on which the
-    spikes and tops below were found and measured (Merritt's default law fills a just-opened chamber
-    differently, and those instances moved; the 78-point grid in docs/numerics.md covers it)."""
+    """``cfg`` with the flow-number orifice law: the pump on which the output grid's miss below was found
+    (Merritt's default law fills a just-opened chamber differently, and the instance moves)."""
     return replace(cfg, orifice=replace(cfg.orifice, law="flow_number"))
 
 
@@ -49,35 +52,38 @@ def test_default_numerics_within_budget_below_the_rated_pressure(cfg, rpm, bar):
         assert abs(err[key]) <= bound, (key, err[key])
 
 
-def test_closing_tolerance_brings_the_spike_peak_within_budget(cfg):
-    """Behaviour against fresh tight references (:func:`reference_revolution`), mobility, 1000 rpm / 5 bar,
-    where the peak error is the solver's (the output grid misses 0.2 %).  With the gear moved after each output
-    step (``gear_coupling: partitioned``), without the tighter tolerance on chambers whose delivery port closes
-    (``closing_tolerance`` 1) the spike's peak overshoots beyond the 2 % budget (+3.9 % measured) and with the
-    default 0.25 it is within (+1.73 %).  With the gear in the stages (default) the gear relieves part of the
-    spike itself, and the bound on hidden tops (``top_tolerance``) takes more: +0.52 % with the factor 1,
-    +0.29 % with 0.25 (+2.00 / +1.55 % without the bound).  Run on the pump whose suction kidney ends at a
-    radial ray, where the spike is steepest: with the default chamber-cut kidney the chambers arrive filled
-    and the factor-1 peaks are +1.53 % (partitioned) and −0.25 % (stages).  Flow-number law
-    (:func:`flow_number_law`); with Merritt's the stages give +0.49 / −0.09 % and the partitioned gear
-    +3.28 / +2.29 % (outside the budget even at 0.25: the stages are the default for that reason)."""
-    rpm, bar = 1000.0, 5.0
-    cfg = flow_number_law(replace(cfg, suction_port=replace(cfg.suction_port, closing_edge="ray")))
+def _family_errors(pump: str, rpm: float, bar: float, field: str, values) -> dict:
+    """Budget figures (:func:`compare`) of the mobility model on a family pump with ``numerics.field`` at
+    each of ``values``, against one fresh tight reference (log-density measure: it uses none of these fields)."""
+    cfg = load_config(family_dir() / f"{pump}.yaml")
+    ref = reference_revolution(cfg, rpm, bar, "mobility")
     pd = cfg.fluid.atmospheric_pa + bar * 1e5
-    peak = {}
-    for scheme in ("partitioned", "stages"):
-        c0 = replace(cfg, numerics=replace(cfg.numerics, gear_coupling=scheme))
-        ref = reference_revolution(c0, rpm, bar, "mobility")
-        for factor in (1.0, cfg.numerics.closing_tolerance):
-            c = replace(c0, numerics=replace(c0.numerics, closing_tolerance=factor))
-            res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
-            peak[scheme, factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa,
-                                           pd)["peak_pressure_error"]
-    assert cfg.numerics.closing_tolerance == 0.25
-    assert peak["partitioned", 1.0] > BUDGET["peak_pressure_error_gauge"], peak
-    assert abs(peak["partitioned", 0.25]) <= BUDGET["peak_pressure_error_gauge"], peak
-    assert abs(peak["stages", 0.25]) <= BUDGET["peak_pressure_error_gauge"], peak
-    assert peak["stages", 0.25] < peak["stages", 1.0] - 0.002, peak
+    err = {}
+    for v in values:
+        c = replace(cfg, numerics=replace(cfg.numerics, **{field: v}))
+        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+        err[v] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)
+    return err
+
+
+def _family_peak_errors(pump: str, rpm: float, bar: float, field: str, values) -> dict:
+    """Peak error (gauge) of :func:`_family_errors` at each value."""
+    return {v: e["peak_pressure_error_gauge"] for v, e in _family_errors(pump, rpm, bar, field, values).items()}
+
+
+@pytest.mark.parametrize("pump,rpm,bar", [("09_power_pack", 1800.0, 2.0), ("10_diesel_engine_oil", 3500.0, 0.7),
+                                          ("08_transmission_relief_groove", 3575.0, 20.0)])
+def test_closing_tolerance_brings_the_spike_peak_within_budget(pump, rpm, bar):
+    """Behaviour against a fresh tight reference, mobility, three pumps of the family: without the tighter
+    tolerance on chambers whose delivery port closes (``closing_tolerance`` 1) the spike's peak is missed by
+    more than the 2 % budget (−9.2 % on 09 at 1800 rpm / 2 bar, −4.0 % on 10 at 3500 rpm / 0.7 bar, −4.7 % on
+    08 at 3575 rpm / 20 bar, measured 2026-12-03), with the default 0.25 it is within (−1.8 / −0.5 / −1.8 %).
+    Over the family grid (docs/numerics.md) the factor 1 puts 12 more of the 48 points (pump 07 aside) outside the budget."""
+    from gerotor_twin.config import Numerics
+    peak = _family_peak_errors(pump, rpm, bar, "closing_tolerance", (1.0, Numerics().closing_tolerance))
+    assert Numerics().closing_tolerance == 0.25
+    assert abs(peak[1.0]) > BUDGET["peak_pressure_error_gauge"], peak
+    assert abs(peak[0.25]) <= BUDGET["peak_pressure_error_gauge"], peak
 
 
 def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):
@@ -101,20 +107,21 @@ def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):
     assert np.all(o.chamber_peak_pressures[1:] >= o.chamber_pressures[:-1])
 
 
-def test_rate_fraction_default_and_wired_through(cfg):
-    """Behaviour: the packaged config and the dataclass default agree (0.3); a tighter cap takes more,
-    shorter sub-steps over the same 40 ms at 5 bar than none (the cap binds on the spikes)."""
+def test_rate_fraction_keeps_the_fill_front_of_a_refilled_chamber(cfg):
+    """Behaviour against a fresh tight reference, mobility, 09 (power pack) at 1050 rpm / 2 bar: a chamber
+    filled back from the delivery kidney through a still tiny port rises from suction to delivery pressure
+    within a few degrees, and ROS2's embedded estimate hardly sees the front.  Without the sub-step cap
+    (``rate_fraction`` 0) a sub-step jumps it: the largest pointwise error is 27.7 % of the waveform's range
+    and the RMS 0.87 % (the budget is 1 %); with the default 0.3 they are 1.9 % and 0.16 % (measured
+    2026-12-04).  Over the family grid the cap changes no verdict (43 of 54 either way) and costs < 1 % of
+    the sub-steps, but it is what keeps the RMS margin at such points (docs/numerics.md).  The packaged
+    config and the dataclass default agree."""
     from gerotor_twin.config import Numerics
-    from gerotor_twin.model.pump import Inputs
     assert cfg.numerics.rate_fraction == Numerics().rate_fraction == 0.3
-    inp = Inputs(314.159, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + 5e5)
-    steps = {}
-    for rf in (0.0, 0.1):
-        m = PumpModel(replace(cfg, numerics=replace(cfg.numerics, rate_fraction=rf)), "mobility")
-        st, out = m.advance(m.initial_state(inp), 0.04, inp)
-        assert np.all(np.isfinite(out.chamber_pressures))
-        steps[rf] = st.counts["substeps"]
-    assert steps[0.1] > 1.2 * steps[0.0], steps
+    err = _family_errors("09_power_pack", 1050.0, 2.0, "rate_fraction", (0.0, 0.3))
+    assert err[0.0]["max_pressure_error_of_range"] > 0.1, err
+    assert err[0.3]["max_pressure_error_of_range"] < 0.05, err
+    assert err[0.0]["rms_pressure_error_of_range"] > 3.0 * err[0.3]["rms_pressure_error_of_range"], err
 
 
 @pytest.mark.slow
@@ -156,8 +163,8 @@ def test_peak_error_splits_into_solver_and_output_grid_closed_form():
 
 def test_numerics_defaults_of_the_dataclass_are_those_of_the_packaged_config(cfg):
     """Behaviour: a pump YAML without a ``numerics`` section (a user's own pump) gets the same numerics as
-    the packaged config, whose defaults the error budget is measured for (the dataclass said 2° while
-    config/pump.yaml said 1.5° until 29188e6; 2° misses the RMS budget at 3000 rpm, docs/numerics.md)."""
+    the packaged config, whose defaults the error budget is measured for (an output step of 2° instead of 1.5°
+    misses the RMS budget at 3000 rpm, docs/numerics.md)."""
     from dataclasses import asdict
     from gerotor_twin.config import Numerics, parse_config
     assert asdict(Numerics()) == asdict(cfg.numerics)
@@ -190,21 +197,14 @@ def test_top_tolerance_out_of_range_is_refused_naming_the_field(value):
         Numerics(top_tolerance=value)
 
 
-def test_top_tolerance_finds_the_top_between_sub_steps(cfg):
+def test_top_tolerance_finds_the_top_between_sub_steps():
     """Behaviour against a fresh tight reference (its log-density measure does not use the top bound),
-    mobility, 2750 rpm / 9 bar, where the closing chamber's top fell between sub-steps: without the bound
-    (``top_tolerance`` 0) the peak output misses it by more than the 2 % budget (−2.30 % measured), with
-    the default 0.25 it is within half of it (−0.42 %).  Flow-number law (:func:`flow_number_law`); with
-    Merritt's this top is not hidden (+0.05 % either way)."""
-    rpm, bar = 2750.0, 9.0
-    cfg = flow_number_law(cfg)
-    pd = cfg.fluid.atmospheric_pa + bar * 1e5
-    ref = reference_revolution(cfg, rpm, bar, "mobility")
-    peak = {}
-    for factor in (0.0, cfg.numerics.top_tolerance):
-        c = replace(cfg, numerics=replace(cfg.numerics, top_tolerance=factor))
-        res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
-        peak[factor] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)["peak_pressure_error"]
-    assert cfg.numerics.top_tolerance == 0.25
+    mobility, 09 (power pack) at 1050 rpm / 30 bar, where a chamber's top fell between sub-steps: without
+    the bound (``top_tolerance`` 0) the peak output misses it by more than the 2 % budget (+2.69 % measured
+    2026-12-03), with the default 1 (the hidden top held to the error tolerance itself) it is within a
+    tenth of it (+0.06 %)."""
+    from gerotor_twin.config import Numerics
+    peak = _family_peak_errors("09_power_pack", 1050.0, 30.0, "top_tolerance", (0.0, Numerics().top_tolerance))
+    assert Numerics().top_tolerance == 1.0
     assert abs(peak[0.0]) > BUDGET["peak_pressure_error_gauge"], peak
-    assert abs(peak[0.25]) <= 0.5 * BUDGET["peak_pressure_error_gauge"], peak
+    assert abs(peak[1.0]) <= 0.25 * BUDGET["peak_pressure_error_gauge"], peak

@@ -180,10 +180,24 @@ def compare(test: Revolution, ref: Revolution, p_suction: float, p_delivery: flo
     }
 
 
-def reference_revolution(cfg, rpm: float, bar: float, model: str = "mobility") -> Revolution:
-    """The tight reference at one operating point (:func:`reference_numerics`)."""
-    return Revolution.of(run_steady(PumpModel(reference_numerics(cfg, rpm), model), rpm, bar,
-                                    max_revolutions=40, rtol=1e-6))
+def _steady_revolution(ref_cfg, rpm: float, bar: float, model: str, cache=None) -> Revolution:
+    """One revolution at periodic steady state of ``ref_cfg`` (its numerics as given), through the
+    on-disk cache ``cache`` (a directory; None: computed; :mod:`.reference_cache`)."""
+    from .reference_cache import cached_revolution, reference_key
+    key = reference_key(ref_cfg, rpm, bar, model) if cache is not None else ""
+    rev, _ = cached_revolution(cache, key, lambda: Revolution.of(run_steady(PumpModel(ref_cfg, model), rpm, bar,
+                                                                             max_revolutions=40, rtol=1e-6)),
+                             Revolution.load)
+    return rev
+
+
+def reference_revolution(cfg, rpm: float, bar: float, model: str = "mobility", cache=None) -> Revolution:
+    """The tight reference at one operating point (:func:`reference_numerics`) [rpm, bar gauge].
+
+    ``cache``: a directory of cached references (:mod:`.reference_cache`, keyed by the pump, the point,
+    the model and the code); None computes it.
+    """
+    return _steady_revolution(reference_numerics(cfg, rpm), rpm, bar, model, cache)
 
 
 def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility",
@@ -221,30 +235,30 @@ def within_budget(row: dict) -> bool:
 
 
 def reference_check(cfg, rpm: float, bar: float, model: str = "mobility",
-                    reference: Revolution | None = None) -> dict:
+                    reference: Revolution | None = None, cache=None) -> dict:
     """How far the reference itself is from a tighter one: each budget figure of :func:`reference_numerics`
     against the same with half its tolerance and twice its output-step refinement, as a fraction of the
     budget (the reference is tight enough where every value is ≤ 0.1).
 
     ``rpm``, ``bar``: the operating point [rpm, bar gauge].  ``reference``: the reference revolution, if
-    already computed.
+    already computed.  ``cache``: as for :func:`reference_revolution`.
     """
-    ref = reference if reference is not None else reference_revolution(cfg, rpm, bar, model)
-    tight = Revolution.of(run_steady(PumpModel(reference_numerics(cfg, rpm, REFERENCE_TOLERANCE / 2,
-                                                                  2 * REFERENCE_REFINEMENT), model),
-                                     rpm, bar, max_revolutions=40, rtol=1e-6))
+    ref = reference if reference is not None else reference_revolution(cfg, rpm, bar, model, cache)
+    tight = _steady_revolution(reference_numerics(cfg, rpm, REFERENCE_TOLERANCE / 2, 2 * REFERENCE_REFINEMENT),
+                               rpm, bar, model, cache)
     p_atm = cfg.fluid.atmospheric_pa
     err = compare(ref, tight, cfg.boundary.suction_pressure_pa, bar_gauge_to_pa_abs(bar, p_atm), p_atm)
     return {k: abs(err[k]) / v for k, v in BUDGET.items()}
 
 
 def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=print,
-                   check_reference: bool = False, label: str = "") -> list[dict]:
+                   check_reference: bool = False, label: str = "", cache=None) -> list[dict]:
     """Run :func:`accuracy` over a grid of points and print one line each, budget verdict included.
 
     ``check_reference``: also print, per point, how much the reference moves against a tighter one
     (:func:`reference_check`, the largest figure as a fraction of its budget; stored as
     ``reference_check`` in each row).  ``label``: a name printed on the header (a pump of the family).
+    ``cache``: a directory of cached references (:mod:`.reference_cache`); None computes each one.
     """
     n = cfg.numerics
     out(f"{label + ': ' if label else ''}default numerics (output step {n.max_step_deg:g}° / "
@@ -262,12 +276,12 @@ def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=
     for model in models:
         for rpm in rpms:
             for bar in bars:
-                ref = reference_revolution(cfg, rpm, bar, model)
+                ref = reference_revolution(cfg, rpm, bar, model, cache)
                 r = accuracy(cfg, rpm, bar, model, reference=ref)
                 r["within_budget"] = within_budget(r)
                 chk = ""
                 if check_reference:
-                    r["reference_check"] = reference_check(cfg, rpm, bar, model, reference=ref)
+                    r["reference_check"] = reference_check(cfg, rpm, bar, model, reference=ref, cache=cache)
                     chk = f"  {max(r['reference_check'].values()):10.3f}"
                 rows.append(r)
                 out(f"  {model:9s} {rpm:5.0f} {bar:5.1f} {r['pressure_range'] / 1e5:6.1f}b "

@@ -18,8 +18,8 @@ closing port) lags it by ≈ 0.71 of its movement per sub-step (docs/numerics.md
 A port that closes during the sub-step would, linearised, keep closing through
 zero area: its share of f_t is scaled by min(1, t_c/h), t_c its time to close
 (:func:`.flows.closing_ports`).  The sub-step is also capped so that no chamber
-pressure moves by more than ``numerics.rate_fraction`` × (p_delivery − p_suction)
-in it, and a chamber whose delivery port closes within four output steps (or opened
+pressure moves by more than ``numerics.rate_fraction`` × Δp_ref in it (Δp_ref: the
+error scale, below), and a chamber whose delivery port closes within four output steps (or opened
 within the last one) has its error tolerance multiplied by
 ``numerics.closing_tolerance``: the pressure spike of the throttled, compressed
 chamber forms there (and that of a chamber refilled from the delivery kidney), and
@@ -27,8 +27,14 @@ the embedded error estimate under-reads it (docs/numerics.md).  A sub-step insid
 which a chamber pressure turns from rising to falling is also held to the bound on
 the top it may hide (``numerics.top_tolerance``, :func:`_top_error`).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
-the pressure relative to the delivery–suction pressure difference (or on
-ln ρ, ``numerics.error_measure``).  The first stage of a sub-step reuses the
+the pressure relative to Δp_ref, the larger of p_delivery − p_suction and the range of
+the chamber pressures over about the last revolution (highest peak − lowest pressure, updated
+every output step: :func:`update_range`, carried in :attr:`.records.PumpState.pressure_range`),
+at least 1 bar (or on ln ρ,
+``numerics.error_measure``).  The range is the scale of the waveform the budget is
+stated on: at a low delivery pressure a trapped chamber's spike makes it many times
+p_delivery − p_suction, and an error measured against the small difference spends
+sub-steps on accuracy nobody can see.  The first stage of a sub-step reuses the
 right-hand side and Jacobian evaluated at the end of the previous output step
 (and after a rejected sub-step).  The outer gear moves inside the stages: its
 velocity (mobility method compiled in; Method 1 and FDM set up from Python),
@@ -69,10 +75,9 @@ from .params import ERROR_PRESSURE, FL_DELIVERY
 from .volumes import move_volumes
 
 # ------------------------------------------------------------------ outputs
-# per-step record columns besides the chamber pressures and gaps
-R_T, R_THETA, R_QDEL, R_QSUC, R_QSD, R_QDR, R_QREST, R_PD, R_EX, R_EY, R_FX, R_FY, R_GAMMA, R_KC, \
-    R_MIN_GAP = range(15)
-N_REC = 15
+# per-step record columns besides the chamber pressures and gaps (the gaps have their own record)
+R_T, R_THETA, R_QDEL, R_QSUC, R_QSD, R_QDR, R_QREST, R_PD, R_EX, R_EY, R_FX, R_FY, R_GAMMA, R_KC = range(14)
+N_REC = 14
 
 # counters
 C_STEPS, C_CAVITATION, C_CONTACT_UNLOADED, C_HOUSING_CONTACT, C_GEAR_CONTACT, C_SUBSTEPS, C_REJECTED, \
@@ -83,7 +88,7 @@ N_COUNTERS = 8
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING = range(5)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE = range(6)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
@@ -138,10 +143,38 @@ def lu_solve(a, piv, b, x):
 
 # ------------------------------------------------------------------ stepping
 @njit(inline="always")
+def error_scale(op, ws):
+    """Δp_ref [Pa], the pressure scale of the sub-step error: the larger of ``op.dp_ref`` (p_d − p_s, at least
+    1 bar) and the chamber pressures' recent range ``ws.ctrl[CT_RANGE]`` (:func:`update_range`)."""
+    return max(op.dp_ref, ws.ctrl[CT_RANGE])
+
+
+@njit
+def update_range(ctrl, peak, pres, n, fade):
+    r"""The chamber pressures' recent range after an output step, into ``ctrl[CT_RANGE]`` [Pa].
+
+    .. math:: R_k = \max\left(R_{k-1} f,\; \max_i \max(\hat p_i, p_i) - \min_i p_i\right),
+              \qquad f = e^{-\omega h / 2\pi}
+
+    over the n chambers: p_i their pressures at the step's end, p̂_i their peaks over the step so far
+    (``ws.peak``); f fades the range by 1/e per revolution.  At every instant some chamber is near suction
+    pressure and, once a revolution, one at its spike, so R is about the waveform's range over the last
+    revolution: the scale the error budget is stated on (docs/numerics.md).  Updated per output step, not
+    per call, so a run split into calls at step boundaries is the run in one call.
+    """
+    hi = -math.inf
+    lo = math.inf
+    for i in range(n):
+        hi = max(hi, peak[i], pres[i])
+        lo = min(lo, pres[i])
+    ctrl[CT_RANGE] = max(ctrl[CT_RANGE] * fade, hi - lo)
+
+
+@njit(inline="always")
 def _error_weights(km, op, ws):
     """Per-volume weights w with ‖err‖ = max |err_i| w_i ≤ 1 accepted.
 
-    Pressure measure: w_i = β_i / (tol·Δp), at least 1/``log_density_tolerance``.  A chamber whose
+    Pressure measure: w_i = β_i / (tol·Δp_ref) (:func:`error_scale`), at least 1/``log_density_tolerance``.  A chamber whose
     delivery port closes or has just opened (``J_TCD`` ≠ 0, :func:`.flows.closing_ports`) is held to
     ``closing_tolerance``·tol and weighed with max(β_i, β(p_d)): an error δ in its ln ρ, made while
     it is still near suction pressure where β_i is small, becomes a pressure error β(p_d)·δ once the
@@ -157,7 +190,7 @@ def _error_weights(km, op, ws):
             if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
                 tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
                 beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
-            ws.wt[i] = max(beta / (tol * op.dp_ref), 1.0 / pc.log_density_tolerance)
+            ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
 
@@ -213,7 +246,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
         for j in range(km.pc.n):
             r = max(r, ws.beta[j] * abs(ws.f0[j]))
         if r > 0.0:
-            cap = op.rate_dp / r
+            cap = op.rate_dp * (error_scale(op, ws) / op.dp_ref) / r
     ws.ctrl[CT_HCAP] = cap
     h = ws.ctrl[CT_PENDING]
     if h > 0.0:
@@ -267,7 +300,7 @@ def ros2_step(y, th, h, km, op, ws):
     pc = km.pc
     if pc.top_tolerance > 0.0 and pc.error_measure == ERROR_PRESSURE:
         en = _top_error(y, ws.ynew, ws.f0, ws.y1, ws.beta, pc.n, h,
-                        pc.top_tolerance * pc.tolerance * op.dp_ref, en)
+                        pc.top_tolerance * pc.tolerance * error_scale(op, ws), en)
     return en
 
 
@@ -285,7 +318,7 @@ def _top_error(y, ynew, f0, f1, beta, n, h, lim, en):
         m = h f_0 t^* - \max(0, \Delta),\qquad t^* = \frac{\Delta - h f_1}{h (f_0 - f_1)},
 
     Δ = y_{n+1,i} − y_{n,i}: where the tangents cross.  The sub-step is rejected (the returned
-    value > 1) when β_i m exceeds ``lim`` = ``top_tolerance`` × ``tolerance`` × (p_d − p_s) [Pa].  Neither the
+    value > 1) when β_i m exceeds ``lim`` = ``top_tolerance`` × ``tolerance`` × Δp_ref [Pa].  Neither the
     embedded error estimate nor the peak output (:func:`_track_peak`, whose continuous extension is
     convex under such a top) sees it: without this a spike's top between sub-steps was missed by
     up to −2.3 % of the pressure difference (docs/numerics.md).
@@ -430,7 +463,6 @@ def _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc,
     rec[n, R_FY] = fy
     rec[n, R_GAMMA] = gam
     rec[n, R_KC] = kc
-    rec[n, R_MIN_GAP] = np.min(ws.gaps0)
     for i in range(rec_p.shape[1]):
         rec_p[n, i] = ws.pres[i]
         rec_peak[n, i] = ws.peak[i]
@@ -466,6 +498,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
+    fade = math.exp(-abs(op.omega) * h / (2.0 * math.pi))     # of the error scale's range, per output step
     for n in range(n_steps):
         if not pc.restriction:
             y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
@@ -474,6 +507,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             integrals[FL_DELIVERY] += y[pc.n]
             y[pc.n] = op.s_d
         counters[C_CAVITATION] += to_pressures(y, km, ws.pres)
+        update_range(ws.ctrl, ws.peak, ws.pres, pc.n, fade)   # the error scale of the next step
         theta += op.omega * h
         t += h
         fx = 0.0
@@ -535,7 +569,7 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
         ws.ctrl[CT_FRESH] = 0.0              # the gaps moved: the next first stage is recomputed
         e[0], e[1] = ex, ey
         rec[i, R_EX], rec[i, R_EY], rec[i, R_FX], rec[i, R_FY] = ex, ey, fx, fy
-        rec[i, R_GAMMA], rec[i, R_KC], rec[i, R_MIN_GAP] = gam, kc, ws.gaps0.min()
+        rec[i, R_GAMMA], rec[i, R_KC] = gam, kc
         rec_gap[i] = ws.gaps0
     return theta, t
 

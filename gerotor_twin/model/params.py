@@ -45,7 +45,7 @@ __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspa
 N_FLOWS = 7
 
 #: Error measures of the sub-step control: on ln(ρ/ρ₀) (absolute) or on the pressure,
-#: relative to the delivery–suction pressure difference.
+#: relative to the error scale (``kernel.error_scale``).
 ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 
 
@@ -112,7 +112,7 @@ class Operating(NamedTuple):
     p_d: float          #: delivery pressure, absolute [Pa] (initial value in restriction mode)
     rho_s: float        #: ρ(p_s)/ρ₀ [-]
     s_d: float          #: ln(ρ(p_d)/ρ₀) [-]
-    dp_ref: float       #: pressure scale of the error measure, max(p_d − p_s, 1 bar) [Pa]
+    dp_ref: float       #: floor of the error measure's pressure scale, max(p_d − p_s, 1 bar) [Pa] (kernel.error_scale)
     beta_d: float = 0.0  #: β(p_d), bulk modulus at the delivery pressure [Pa]
     rho_d: float = 1.0   #: e^{s_d} = ρ(p_d)/ρ₀ [-]
     rate_dp: float = 0.0  #: sub-step ≤ rate_dp / max |dp/dt| of the chambers (numerics.rate_fraction × dp_ref; 0: off) [Pa]
@@ -144,10 +144,11 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (5,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+    ctrl: np.ndarray        #: (6,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
                             #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s];
-                            #: how many ports close within the horizon there (flows.closing_ports)
+                            #: how many ports close within the horizon there (flows.closing_ports);
+                            #: the chamber pressures' recent range, the error scale's (kernel.update_range) [Pa]
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
     peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
@@ -211,7 +212,11 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
 
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
-    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction)."""
+    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction).
+
+    ``dp_ref`` is the floor of the sub-step error scale; the kernel takes the larger of it and the chamber
+    pressures' recent range (:func:`.kernel.error_scale`).
+    """
     omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # one compiled specialisation (_jit.typed)
     dp_ref = max(p_d - p_s, 1e5)
     s_d = log_density_of(p_d, km.eos)
@@ -230,6 +235,6 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(5),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(6),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
                      gear_rows=np.zeros((n, N_ROWS)))

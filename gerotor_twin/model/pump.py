@@ -202,6 +202,7 @@ class PumpModel:
         theta, t = state.theta, state.t
         ws = self._ws
         ws.ctrl[K.CT_SUBSTEP] = state.substep
+        ws.ctrl[K.CT_RANGE] = state.pressure_range
         if n:
             if self._move == K.MOVE_EXTERNAL:
                 theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p,
@@ -220,7 +221,8 @@ class PumpModel:
             K.to_pressures(y, self.kernel, pres)
         new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
                         volumes=vols, swept_angle=swept,
-                        substep=float(ws.ctrl[K.CT_SUBSTEP]))
+                        substep=float(ws.ctrl[K.CT_SUBSTEP]),
+                        pressure_range=float(ws.ctrl[K.CT_RANGE]))
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
     def gaps(self, theta: float, e) -> tuple[np.ndarray, float, int]:

@@ -1,0 +1,93 @@
+"""The on-disk cache of reference revolutions (``bench accuracy``): what its key depends on, and that a
+cached revolution is the computed one (behaviour tier)."""
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gerotor_twin
+from gerotor_twin.model import reference_cache as RC
+from gerotor_twin.model.accuracy import Revolution, reference_numerics
+
+PKG = Path(gerotor_twin.__file__).resolve().parent
+
+
+def _rev(scale=1.0):
+    th = np.linspace(0.1, 2 * np.pi, 8)
+    return Revolution(th, scale * np.outer(np.ones(8), [1e5, 2e5, 3e5]), scale * np.full(8, 1e-4), 0.95, 1e-4,
+                      3.5e5 * scale)
+
+
+def test_code_digest_covers_the_code_a_reference_runs():
+    """Behaviour: the digest hashes the kernel, the model driver, the steady-state run, the bearing and
+    the configuration, so an edit of any of them invalidates every cached reference by itself."""
+    from gerotor_twin import _jit
+    from gerotor_twin.model import accuracy
+    files = {f.relative_to(PKG).as_posix() for f in _jit.import_closure([Path(accuracy.__file__).resolve()])}
+    for must in ("model/kernel.py", "model/pump.py", "model/steady.py", "model/accuracy.py", "config.py",
+                 "bearing/mobility.py", "geometry/tables.py"):
+        assert must in files, must
+    assert "report/build.py" not in files and "ros/node.py" not in files
+
+
+def test_key_depends_on_the_pump_the_point_the_model_and_the_code(cfg, monkeypatch):
+    """Behaviour: each input of a reference changes the key; the numerics under test do not enter
+    (the reference numerics replace them)."""
+    ref = reference_numerics(cfg, 3000.0)
+    k = RC.reference_key(ref, 3000.0, 27.5, "mobility")
+    assert RC.reference_key(ref, 3000.0, 27.5, "mobility") == k
+    assert RC.reference_key(ref, 2999.0, 27.5, "mobility") != k
+    assert RC.reference_key(ref, 3000.0, 27.0, "mobility") != k
+    assert RC.reference_key(ref, 3000.0, 27.5, "fixed") != k
+    tip = dataclasses.replace(cfg, clearances=dataclasses.replace(cfg.clearances,
+                                                                 tooth_tip_m=1.01 * cfg.clearances.tooth_tip_m))
+    assert RC.reference_key(reference_numerics(tip, 3000.0), 3000.0, 27.5, "mobility") != k
+    looser = dataclasses.replace(cfg, numerics=dataclasses.replace(cfg.numerics, tolerance=0.5 * cfg.numerics.tolerance))
+    assert RC.reference_key(reference_numerics(looser, 3000.0), 3000.0, 27.5, "mobility") == k
+    monkeypatch.setattr(RC, "code_digest", lambda: "another kernel")
+    assert RC.reference_key(ref, 3000.0, 27.5, "mobility") != k
+
+
+def test_cached_revolution_is_computed_once_and_read_back_whole(tmp_path):
+    """Behaviour: the first call computes and stores, the second reads the same arrays back without
+    computing; a torn file is recomputed and replaced; no directory: always computed."""
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return _rev()
+
+    a, hit_a = RC.cached_revolution(tmp_path, "k", compute, Revolution.load)
+    b, hit_b = RC.cached_revolution(tmp_path, "k", compute, Revolution.load)
+    assert (hit_a, hit_b, len(calls)) == (False, True, 1)
+    for f in ("theta", "chamber_pressures", "delivery_flow"):
+        assert np.array_equal(getattr(a, f), getattr(b, f))
+    assert (b.volumetric_efficiency, b.peak_pressure) == (a.volumetric_efficiency, a.peak_pressure)
+    (tmp_path / "k.npz").write_bytes(b"torn")
+    _, hit_c = RC.cached_revolution(tmp_path, "k", compute, Revolution.load)
+    assert not hit_c and len(calls) == 2 and list(tmp_path.iterdir()) == [tmp_path / "k.npz"]
+    RC.cached_revolution(None, "k", compute, Revolution.load)
+    assert len(calls) == 3
+
+
+def test_default_directory_follows_the_environment(monkeypatch, tmp_path):
+    """Behaviour: $GEROTOR_TWIN_CACHE, else $XDG_CACHE_HOME/gerotor_twin."""
+    monkeypatch.setenv("GEROTOR_TWIN_CACHE", str(tmp_path / "a"))
+    assert RC.default_directory() == tmp_path / "a" / "references"
+    monkeypatch.delenv("GEROTOR_TWIN_CACHE")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
+    assert RC.default_directory() == tmp_path / "x" / "gerotor_twin" / "references"
+
+
+@pytest.mark.parametrize("text, word", [("nosuchkey=1", "nosuchkey"), ("tolerance=abc", "tolerance"),
+                                        ("tolerance=-1", "tolerance")])
+def test_bench_numerics_override_refuses_a_bad_field_naming_it(text, word):
+    """Behaviour: ``bench --numerics`` with an unknown key, a value of the wrong type or out of range is
+    one error line naming it (exit 2), before anything runs."""
+    r = subprocess.run([sys.executable, "-m", "gerotor_twin.cli", "bench", "accuracy", "--numerics", text],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert word in r.stderr and "Traceback" not in r.stderr
