@@ -81,14 +81,20 @@ N_REC = 14
 
 # counters
 C_STEPS, C_CAVITATION, C_CONTACT_UNLOADED, C_HOUSING_CONTACT, C_GEAR_CONTACT, C_SUBSTEPS, C_REJECTED, \
-    C_FAILED = range(8)
-N_COUNTERS = 8
+    C_FAILED, C_ABANDONED = range(9)
+N_COUNTERS = 9
+
+#: Sub-step attempts (accepted and rejected) one output step may take before it is abandoned: the bound on one
+#: call's work per output step (≈ 5 µs each: ≈ 10 ms), far above the 2–10 a step takes on the pump family.
+MAX_ATTEMPTS = 2000
+#: :func:`pressure_step`'s status: the output step done, or abandoned (a non-finite sub-step, or the attempts spent).
+STEP_DONE, STEP_NONFINITE, STEP_WORK_BOUND = 0, 1, 2
 
 # how the outer gear moves in integrate()
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE = range(6)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE, CT_STATUS = range(7)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
@@ -343,6 +349,10 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     The gear displacement (ex, ey) is frozen over the step; the gaps are
     interpolated linearly between their values at the two ends of the step.  On entry ``ws.gaps0`` holds the gaps at θ.  ``ws.ctrl[CT_SUBSTEP]``
     carries the proposed sub-step between calls.
+
+    Returns ``STEP_DONE``, or why the step was abandoned part-way (``y`` then holds the last accepted
+    sub-step): ``STEP_NONFINITE``, a sub-step at the smallest size gave a non-finite state;
+    ``STEP_WORK_BOUND``, :data:`MAX_ATTEMPTS` sub-steps did not finish it.  The caller stops there.
     """
     pc = km.pc
     n1 = y.shape[0]
@@ -353,7 +363,11 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     contact(km.tab, pc.n, pc.tip_clearance, theta + op.omega * big_h, ex, ey, ws.gaps_end, ws.cmat)
     for k in range(pc.n):
         ws.gaps_start[k] = ws.gaps0[k]
+    attempts = 0
     while done < big_h * (1.0 - 1e-12):
+        attempts += 1
+        if attempts > MAX_ATTEMPTS:
+            return STEP_WORK_BOUND
         h = min(h, big_h - done)
         th = theta + op.omega * done
         if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ): also the rate cap
@@ -368,10 +382,10 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             for i in range(n1):
                 if not math.isfinite(ws.ynew[i]):
                     finite = False
-            if en > 1.0 or not finite:
-                counters[C_FAILED] += 1
-                if not finite:
-                    return
+            if not finite:
+                return STEP_NONFINITE
+            if en > 1.0:
+                counters[C_FAILED] += 1               # accepted at the smallest sub-step above the tolerance
             for i in range(n1):
                 y[i] = ws.ynew[i]
             ws.ctrl[CT_PENDING] = h               # its ∫ flow dt is closed by the next first stage
@@ -383,9 +397,13 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             counters[C_SUBSTEPS] += 1
         else:
             counters[C_REJECTED] += 1                  # stage 1 stays valid: same (y, θ)
-        fac = 4.0 if en < 1e-8 else min(4.0, max(0.2, 0.9 / math.sqrt(en)))
+        if not math.isfinite(en):
+            fac = 0.2                                   # overflow in the stages: shrink, down to h_min
+        else:
+            fac = 4.0 if en < 1e-8 else min(4.0, max(0.2, 0.9 / math.sqrt(en)))
         h = max(h * fac, h_min)
     ws.ctrl[CT_SUBSTEP] = h
+    return STEP_DONE
 
 
 @njit(inline="always")
@@ -502,7 +520,11 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     for n in range(n_steps):
         if not pc.restriction:
             y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
-        pressure_step(y, theta, h, ex, ey, km, op, ws, counters, integrals)
+        status = pressure_step(y, theta, h, ex, ey, km, op, ws, counters, integrals)
+        if status != STEP_DONE:
+            ws.ctrl[CT_STATUS] = status            # the caller reports it (PumpModel.advance: SolverFailure)
+            counters[C_ABANDONED] += 1
+            break
         if not pc.restriction:
             integrals[FL_DELIVERY] += y[pc.n]
             y[pc.n] = op.s_d
@@ -558,9 +580,12 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
     if gear_in_stages(km):
         return _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak,
                                              rec_gap, counters, integrals)
+    abandoned = counters[C_ABANDONED]
     for i in range(n_steps):
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
+        if counters[C_ABANDONED] != abandoned:
+            break
         kc = int(rec[i, R_KC])
         ex, ey, fx, fy = heun_step(bearing.kernel, bearing.params, e[0], e[1], h, theta, op.omega, kc, km, ws,
                                    counters)
@@ -577,10 +602,13 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
 def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap,
                                   counters, integrals):
     """:func:`integrate_external` with the gear in the stages: linearise with ``bearing``, then one step."""
+    abandoned = counters[C_ABANDONED]
     for i in range(n_steps):
         ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
         to_pressures(y, km, ws.pres)
         linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
+        if counters[C_ABANDONED] != abandoned:
+            break
     return theta, t

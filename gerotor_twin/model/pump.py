@@ -28,7 +28,18 @@ from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
 from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, at_temperature, kernel_model, operating, workspace
 
-__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "BEARING_MODELS", "TEMPERATURE_STEP_K"]
+__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "SolverFailure", "BEARING_MODELS", "TEMPERATURE_STEP_K"]
+
+
+class SolverFailure(FloatingPointError):
+    """An output step the kernel abandoned (:data:`.kernel.STEP_NONFINITE`, :data:`.kernel.STEP_WORK_BOUND`) or a
+    non-finite state: the model's state is no longer a solution, and its caller must reset it (the twin does,
+    counted and reported: ``twin.clock_driver``)."""
+
+
+#: Why an output step was abandoned, as a user reads it (kernel.STEP_*).
+_ABANDONED = {K.STEP_NONFINITE: "a sub-step at the smallest size gave a non-finite state",
+              K.STEP_WORK_BOUND: f"{K.MAX_ATTEMPTS} sub-steps did not finish it (the bound on one step's work)"}
 
 #: The kernel's oil properties are re-evaluated when the oil temperature has moved by more
 #: than this since the last evaluation [K] (μ of a VG46 oil changes by ≈ 0.2 % over it at 40 °C).
@@ -211,8 +222,12 @@ class PumpModel:
                 theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
                                        counters, vols, self._move)
             K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel.eos)
+        if counters[K.C_ABANDONED] != state.counters[K.C_ABANDONED]:
+            why = _ABANDONED.get(int(ws.ctrl[K.CT_STATUS]), "unknown status")
+            raise SolverFailure(f"output step at t = {t:.6g} s, shaft angle {math.degrees(theta) % 360.0:.1f}° "
+                                f"abandoned: {why}")
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
-            raise FloatingPointError("pump model produced a non-finite state (solver failure)")
+            raise SolverFailure("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
         if n:
             pres = ws.pres.copy()                  # integrate() leaves the pressures of its last state there

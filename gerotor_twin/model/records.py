@@ -68,7 +68,7 @@ class PumpState:
                 "housing_contact": int(c[K.C_HOUSING_CONTACT]),
                 "gear_contact_corrections": int(c[K.C_GEAR_CONTACT]),
                 "substeps": int(c[K.C_SUBSTEPS]), "rejected_substeps": int(c[K.C_REJECTED]),
-                "solver_failures": int(c[K.C_FAILED])}
+                "solver_failures": int(c[K.C_FAILED]), "abandoned_steps": int(c[K.C_ABANDONED])}
 
 
 @dataclass(frozen=True)
