@@ -9,6 +9,9 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["test", "test.*"]),
+    # the flat layout stated explicitly: an editable install is then a plain .pth entry for the source
+    # tree (no import-hook finder, no "Editable installation" notice in the install log)
+    package_dir={"": "."},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
@@ -23,7 +26,6 @@ setup(
     maintainer_email="gerotor-twin@example.org",
     description="Real-time digital twin of a Gerotor pump (lumped-parameter model with outer-gear micro-motion)",
     license="Apache-2.0",
-    tests_require=["pytest"],
     entry_points={
         "console_scripts": [
             "gerotor-twin = gerotor_twin.cli:main",
