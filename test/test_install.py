@@ -1,21 +1,27 @@
-"""The package as a user installs it: a clean install log (behaviour).
+"""The package as a user installs it: a clean install log, and complete once installed (behaviour).
 
 A copy of the source tree (without venv, caches or build output) is built with pip as
 ``make setup`` builds it (build isolation: the newest setuptools the index offers).  The
 install log must hold nothing of the project's making (setup metadata setuptools does not
 know, the editable-install notice); the lines this machine's pip configuration prints about
-its own ignored index locations are not the project's and are left out.
+its own ignored index locations are not the project's and are left out.  The wheel, installed
+into a venv and into a colcon-like prefix (``lib/pythonX.Y/site-packages`` + ``share/``, found
+through ``AMENT_PREFIX_PATH``), must run a family command from outside the source tree: the
+pumps of ``config/pumps/`` must be found in the installed ``share/gerotor_twin/``.
 
 Every pip call installs into a fresh directory of the test, never into the running
-environment (``--python`` of an empty venv).
+environment (``--python`` of an empty venv; ``pip install --prefix`` run in the running
+environment would uninstall its own copy of the package).
 """
-
 from __future__ import annotations
 
 import os
 import shutil
+import site
 import subprocess
 import sys
+import sysconfig
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -23,6 +29,7 @@ import pytest
 pytestmark = pytest.mark.slow            # pip builds with build isolation: ≈ 10 s for the module
 
 ROOT = Path(__file__).resolve().parent.parent
+PUMPS = sorted(p.stem for p in (ROOT / "config" / "pumps").glob("*.yaml"))
 _NOT_OURS = "is ignored: it is neither a file nor a directory"      # this machine's pip.conf, not the project
 _JUNK = shutil.ignore_patterns(".venv", ".git", "__pycache__", "build", "out", "*.egg-info", ".pytest_cache")
 
@@ -79,3 +86,60 @@ def _env(**extra: str) -> dict:
     """The environment without this checkout on the path and without an ament prefix, plus ``extra``."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "AMENT_PREFIX_PATH")}
     return {**env, **extra}
+
+
+def _venv_install(whl: Path, tmp: Path) -> tuple[Path, dict, Path]:
+    """The wheel in a venv whose other packages are the running environment's (through a ``.pth``);
+    the interpreter, its environment and the prefix the data files belong in."""
+    python = _empty_venv(tmp / "venv")
+    _pip("--python", str(python), "install", "--quiet", "--no-deps", str(whl))
+    purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+                             capture_output=True, text=True, check=True).stdout.strip()
+    Path(purelib, "running_env.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    return python, _env(), tmp / "venv"
+
+
+def _prefix_install(whl: Path, tmp: Path) -> tuple[Path, dict, Path]:
+    """The wheel in a prefix laid out as a colcon install space, used as its ``setup.bash`` would (as
+    :func:`_venv_install`)."""
+    installer = _empty_venv(tmp / "installer")
+    prefix = tmp / "install"
+    _pip("--python", str(installer), "install", "--quiet", "--no-deps", "--prefix", str(prefix), str(whl))
+    purelib = sysconfig.get_path("purelib", vars={"base": str(prefix), "platbase": str(prefix)})
+    return Path(sys.executable), _env(PYTHONPATH=purelib, AMENT_PREFIX_PATH=str(prefix)), prefix
+
+
+@pytest.mark.parametrize("install", [_venv_install, _prefix_install], ids=["venv", "colcon-prefix"])
+def test_installed_wheel_finds_the_pump_family(wheel, tmp_path, install):
+    """Behaviour: from an installed wheel, outside the source tree, ``bench accuracy --family`` finds the
+    pumps of ``config/pumps/`` (an unknown ``--pumps`` name is refused with the list of the family's pumps,
+    before any model runs) in the installed ``share/gerotor_twin/``."""
+    python, env, prefix = install(wheel[0], tmp_path)
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    r = subprocess.run([str(python), "-m", "gerotor_twin", "bench", "accuracy", "--family", "--pumps",
+                        "no_such_pump"], capture_output=True, text=True, cwd=work, env=env, timeout=300)
+    assert r.returncode == 2, r.stdout + r.stderr
+    shown = r.stderr.split("allowed:", 1)[-1].split("...", 1)[0].strip()     # the one-line error is clipped
+    assert "--pumps" in r.stderr and "05_compressor_lube" in shown and ", ".join(PUMPS).startswith(shown), r.stderr
+    where = subprocess.run([str(python), "-c", "import gerotor_twin.resources as r; print(r.__file__); "
+                            "print(r.resource_path('config', 'pumps'))"],
+                           capture_output=True, text=True, cwd=work, env=env, timeout=120)
+    assert where.returncode == 0, where.stderr
+    module, pumps_dir = (Path(p) for p in where.stdout.split())
+    assert tmp_path in module.parents and ROOT not in module.parents      # the installed copy ran
+    assert pumps_dir == prefix / "share" / "gerotor_twin" / "config" / "pumps"
+
+
+def test_wheel_holds_every_data_file(wheel):
+    """Behaviour: the wheel installs under ``share/gerotor_twin/`` every file the commands read beside the code
+    (the pumps, node parameters, bench profiles, launch file, layouts, bundled recordings), at its path in the
+    source tree."""
+    data = "gerotor_twin-0.1.0.data/data/share/gerotor_twin/"
+    with zipfile.ZipFile(wheel[0]) as z:
+        names = z.namelist()
+    shared = {n[len(data):] for n in names if n.startswith(data)}
+    wanted = {p.relative_to(ROOT).as_posix() for pattern in ("config/**/*.yaml", "launch/*.launch.py", "layouts/*",
+                                                             "bags/*.mcap", "package.xml") for p in ROOT.glob(pattern)}
+    assert wanted <= shared, sorted(wanted - shared)
+    assert "gerotor_twin/report/report.js" in names
