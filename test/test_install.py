@@ -48,6 +48,12 @@ def _empty_venv(path: Path) -> Path:
     return path / "bin" / "python"
 
 
+def _env(**extra: str) -> dict:
+    """The environment without this checkout on the path and without an ament prefix, plus ``extra``."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "AMENT_PREFIX_PATH")}
+    return {**env, **extra}
+
+
 @pytest.fixture(scope="module")
 def source(tmp_path_factory) -> Path:
     """A copy of the source tree as a fresh clone has it."""
@@ -80,12 +86,6 @@ def test_editable_install_log_is_clean(source, tmp_path):
                        capture_output=True, text=True, cwd=tmp_path, env=_env(), timeout=60)
     assert r.returncode == 0, r.stderr
     assert Path(r.stdout.strip()) == source / "gerotor_twin" / "__init__.py"
-
-
-def _env(**extra: str) -> dict:
-    """The environment without this checkout on the path and without an ament prefix, plus ``extra``."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "AMENT_PREFIX_PATH")}
-    return {**env, **extra}
 
 
 def _venv_install(whl: Path, tmp: Path) -> tuple[Path, dict, Path]:
