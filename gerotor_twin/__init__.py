@@ -12,6 +12,9 @@ module                   responsibility
                          ``config_notes``: values far from their default, changed
                          and removed keys (warnings, not errors)
 ``errors``               :class:`InputError`: field, value, allowed range
+``resources``            the one lookup of the files beside the code (config,
+                         pump family, launch, layouts, bags): source tree,
+                         ament index or ``share/gerotor_twin`` of the prefix
 ``units``                rpm/bar/L-min conversions, used only at the edges
 ``geometry``             gerotor profiles, chambers (V, dV/dθ, l_x, l_y, arms),
                          ports, tooth-tip gaps (h, le, v_r), lateral gaps,

@@ -24,22 +24,14 @@ from .config_oil import (DEFAULT_REFERENCE_TEMPERATURE_K, OIL_SET_FLUID_KEYS, fl
 from .hydraulics.fluid import Fluid
 from .hydraulics.mixture import AirContent
 from .hydraulics.oil import OilProperties
+from .resources import resource_path
 
 __all__ = ["PumpConfig", "Orifice", "Boundary", "OperatingRange", "Numerics", "Clearances", "MicroMotion",
            "load_config", "default_config_path", "parse_config"]
 
-DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "config" / "pump.yaml"
-
-
 def default_config_path() -> Path:
-    """The default pump (``config/pump.yaml`` of the source tree or the installed share)."""
-    if DEFAULT_CONFIG.exists():
-        return DEFAULT_CONFIG
-    try:
-        from ament_index_python.packages import get_package_share_directory
-        return Path(get_package_share_directory("gerotor_twin")) / "config" / "pump.yaml"
-    except Exception:  # noqa: BLE001 - fall back to the package copy
-        return DEFAULT_CONFIG
+    """The default pump: ``config/pump.yaml`` of the package's data (:func:`gerotor_twin.resources.share_dir`)."""
+    return resource_path("config", "pump.yaml")
 
 
 @dataclass(frozen=True)

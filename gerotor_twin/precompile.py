@@ -1,15 +1,18 @@
 """Build the numba cache at install time: ``python -m gerotor_twin.precompile``.
 
-The first model start compiles the stepper (≈ 70 s on two shared cores);
+The first model start compiles the stepper (39 specialisations, ≈ 80–170 s on two shared cores);
 ``make setup`` runs this module once so that no user waits for it.  It runs
 what a first model start runs — a few output steps of the default pump with
-each gear model (default: all four),
-an oil-temperature change, a zero-length call — so numba compiles and caches
-exactly the specialisations a user hits.  The compiled code depends on the
-argument *types* only, never on a pump's data (:func:`gerotor_twin._jit.typed`
-keeps the types the same for every pump, table size and fluid model), so the
-cache serves any pump.  A second run, or a run after an edit of a module the
-kernel does not use, compiles nothing and takes a few seconds.
+each gear model given (default: ``mobility``, the twin's, and ``fixed``, which adds
+nothing to it), an oil-temperature change, a zero-length call — so numba compiles
+and caches exactly the specialisations a user hits.  The other gear models (Method 1
+``short``, ``fdm``) add 7 and 5 small specialisations of their own, ≈ 6–7 s each: they
+compile on their first use, announced by one line (:class:`announce_compilation`), and
+are cached from then on.  The compiled code depends on the argument *types* only,
+never on a pump's data (:func:`gerotor_twin._jit.typed` keeps the types the same for
+every pump, table size and fluid model), so the cache serves any pump.  A second run,
+or a run after an edit of a module the kernel does not use, compiles nothing and takes
+a few seconds.
 
 Prints one line: what was compiled and how long it took.  Exit status 0; 1 with
 ``--expect-cached`` when anything had to be compiled (the cache was cold or stale).
@@ -22,14 +25,56 @@ import math
 import sys
 import time
 
-__all__ = ["compiled_during", "warm_up", "main"]
+__all__ = ["compiled_during", "announce_compilation", "warm_up", "main", "DEFAULT_MODELS"]
 
-#: The gear models compiled by default: all of them (``short`` and ``fdm`` add ≈ 8 s to the ≈ 75 s
-#: of the compiled stepper that ``mobility`` and ``fixed`` share).
-DEFAULT_MODELS = ("mobility", "fixed", "short", "fdm")
+#: The gear models compiled at install: the twin's and the fixed centre (one compiled stepper, which
+#: ``fixed`` shares with ``mobility``).  ``short`` and ``fdm`` compile on first use (docs/performance.md).
+DEFAULT_MODELS = ("mobility", "fixed")
 
 
-class compiled_during:
+def _our_function(ev) -> str | None:
+    """The qualified name of the function a numba compile event is about, if it is this package's."""
+    f = ev.data["dispatcher"].py_func
+    return f"{f.__module__}.{f.__qualname__}" if f.__module__.startswith("gerotor_twin") else None
+
+
+class _CompileListener:
+    """Base of the context managers below: a numba ``numba:compile`` listener registered inside the block,
+    calling :meth:`started` / :meth:`finished` with the qualified name of each of this package's functions."""
+
+    def started(self, name: str) -> None:
+        pass
+
+    def finished(self, name: str) -> None:
+        pass
+
+    def __enter__(self):
+        from numba.core import event
+
+        outer = self
+
+        class _Listener(event.Listener):
+            def on_start(inner, ev):  # noqa: N805 - numba's Listener API
+                name = _our_function(ev)
+                if name:
+                    outer.started(name)
+
+            def on_end(inner, ev):  # noqa: N805
+                name = _our_function(ev)
+                if name:
+                    outer.finished(name)
+
+        self._listener = _Listener()
+        event.register("numba:compile", self._listener)
+        return self
+
+    def __exit__(self, *exc):
+        from numba.core import event
+        event.unregister("numba:compile", self._listener)
+        return False
+
+
+class compiled_during(_CompileListener):
     """Context manager that records every numba compilation of this package's functions inside it.
 
     ``.functions``: the qualified names, one per specialisation compiled (cache loads are not
@@ -37,28 +82,30 @@ class compiled_during:
     """
 
     def __enter__(self):
-        from numba.core import event
-
-        class _Listener(event.Listener):
-            def on_start(inner, ev):  # noqa: N805 - numba's Listener API
-                pass
-
-            def on_end(inner, ev):  # noqa: N805
-                f = ev.data["dispatcher"].py_func
-                if f.__module__.startswith("gerotor_twin"):
-                    self.functions.append(f"{f.__module__}.{f.__qualname__}")
-
         self.functions: list[str] = []
-        self._listener = _Listener()
-        event.register("numba:compile", self._listener)
         self._t0 = time.perf_counter()
-        return self
+        return super().__enter__()
+
+    def finished(self, name: str) -> None:
+        self.functions.append(name)
 
     def __exit__(self, *exc):
-        from numba.core import event
         self.seconds = time.perf_counter() - self._t0
-        event.unregister("numba:compile", self._listener)
-        return False
+        return super().__exit__(*exc)
+
+
+class announce_compilation(_CompileListener):
+    """Context manager that prints ``message`` once (to ``stream``, default stderr) when numba starts compiling
+    one of this package's functions inside it: the progress line of a first use that compiles (a gear model
+    left out of :data:`DEFAULT_MODELS`); a start from the cache prints nothing.  ``.announced``: it printed."""
+
+    def __init__(self, message: str, stream=None):
+        self.message, self.stream, self.announced = message, stream, False
+
+    def started(self, name: str) -> None:
+        if not self.announced:
+            self.announced = True
+            print(self.message, file=self.stream or sys.stderr, flush=True)
 
 
 def warm_up(config=None, models=DEFAULT_MODELS) -> None:
@@ -69,7 +116,7 @@ def warm_up(config=None, models=DEFAULT_MODELS) -> None:
     config : PumpConfig, optional
         Pump (default: the default pump, ``config/pump.yaml``).
     models : sequence of str
-        Gear models (:data:`gerotor_twin.model.pump.BEARING_MODELS`).
+        Gear models (:data:`gerotor_twin.model.pump.BEARING_MODELS`; default :data:`DEFAULT_MODELS`).
     """
     from .config import load_config
     from .model.pump import Inputs, PumpModel
@@ -91,7 +138,8 @@ def warm_up(config=None, models=DEFAULT_MODELS) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m gerotor_twin.precompile", description=__doc__.splitlines()[0])
     ap.add_argument("--models", default=",".join(DEFAULT_MODELS),
-                    help="comma-separated gear models to compile (default: %(default)s)")
+                    help="comma-separated gear models to compile (default: %(default)s; "
+                         "all four: mobility,fixed,short,fdm)")
     ap.add_argument("--expect-cached", action="store_true",
                     help="exit 1 if anything had to be compiled (a check that the cache is warm)")
     args = ap.parse_args(argv)

@@ -184,3 +184,27 @@ def test_precompile_leaves_nothing_to_compile(tmp_path):
     assert first.returncode == 1 and "compiled" in first.stdout, first.stdout + first.stderr[-2000:]
     second = subprocess.run(run, env=env, capture_output=True, text=True, timeout=900)
     assert second.returncode == 0 and "nothing compiled" in second.stdout, second.stdout + second.stderr[-2000:]
+
+
+_ANNOUNCE = r"""
+import sys
+from gerotor_twin.hydraulics.oil import walther_kinematic_viscosity
+from gerotor_twin.precompile import announce_compilation
+with announce_compilation("compiling now") as a:
+    walther_kinematic_viscosity(313.15, 9.0, 3.5)
+print(a.announced)
+"""
+
+
+def test_first_use_compilation_is_announced_once_and_a_cached_start_is_silent(tmp_path):
+    """Behaviour: the progress line of a gear model compiled on first use (``announce_compilation``): one line
+    when numba compiles this package's functions (here a Walther kernel and the two it calls, in a temporary
+    ``NUMBA_CACHE_DIR``), none when the next process loads them from the cache."""
+    import os
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    runs = [subprocess.run([sys.executable, "-c", _ANNOUNCE], env=env, capture_output=True, text=True, timeout=300)
+            for _ in range(2)]
+    assert all(r.returncode == 0 for r in runs), runs[0].stderr[-2000:] + runs[1].stderr[-2000:]
+    assert runs[0].stdout.split() == ["True"] and runs[0].stderr.count("compiling now") == 1, runs[0].stderr
+    assert runs[1].stdout.split() == ["False"] and "compiling now" not in runs[1].stderr, runs[1].stderr

@@ -9,6 +9,7 @@ flow-summary values are findable by name in both.  setup.py installs both files.
 """
 from __future__ import annotations
 
+import ast
 import json
 import re
 import xml.etree.ElementTree as ET
@@ -116,5 +117,11 @@ def test_plotjuggler_layout():
 
 
 def test_setup_installs_layouts():
-    assert '(f"share/{PACKAGE}/layouts", glob("layouts/*.json") + glob("layouts/*.xml"))' in (
-        ROOT / "setup.py").read_text()
+    """Behaviour: both layouts match a pattern of setup.py's ``SHARE`` (the files installed under
+    ``share/gerotor_twin/``; that a built wheel holds them is test_install.py's)."""
+    tree = ast.parse((ROOT / "setup.py").read_text())
+    (share,) = [ast.literal_eval(n.value) for n in tree.body
+                if isinstance(n, ast.Assign) and [t.id for t in n.targets] == ["SHARE"]]
+    installed = {p for pattern in share for p in ROOT.glob(pattern)}
+    layouts = sorted((ROOT / "layouts").iterdir())
+    assert len(layouts) == 2 and set(layouts) <= installed

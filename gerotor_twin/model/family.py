@@ -14,8 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..config import default_config_path, load_config
+from ..config import load_config
 from ..errors import InputError
+from ..resources import resource_path
 
 __all__ = ["FamilyPump", "family_dir", "family_pumps", "family_grid", "speed_extremes", "pressure_extremes"]
 
@@ -29,8 +30,8 @@ class FamilyPump:
 
 
 def family_dir() -> Path:
-    """``config/pumps/`` beside the default pump (source tree or installed share)."""
-    return default_config_path().parent / "pumps"
+    """``config/pumps/`` of the package's data (:func:`gerotor_twin.resources.share_dir`)."""
+    return resource_path("config", "pumps")
 
 
 def family_pumps(directory: str | Path | None = None, names: str | None = None) -> list[FamilyPump]:

@@ -12,6 +12,7 @@ Pa (absolute), m, m³/s, s.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -23,6 +24,7 @@ from ..errors import InputError
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
 from ..hydraulics.state_equation import convert_log_density, log_density_of
+from ..precompile import announce_compilation
 from . import kernel as K
 from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
@@ -90,6 +92,7 @@ class PumpModel:
         self.temperature_k = config.reference_temperature_k
         self._ws = workspace(self.N)
         self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
+        self._announced = False                # _first_use
 
     def _make_bearing(self, mu: float) -> None:
         g = self.geometry
@@ -216,8 +219,9 @@ class PumpModel:
         ws.ctrl[K.CT_RANGE] = state.pressure_range
         if n:
             if self._move == K.MOVE_EXTERNAL:
-                theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p,
-                                                rec_peak, rec_g, counters, vols)
+                with self._first_use():
+                    theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec,
+                                                    rec_p, rec_peak, rec_g, counters, vols)
             else:
                 theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
                                        counters, vols, self._move)
@@ -239,6 +243,15 @@ class PumpModel:
                         substep=float(ws.ctrl[K.CT_SUBSTEP]),
                         pressure_range=float(ws.ctrl[K.CT_RANGE]))
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
+
+    def _first_use(self):
+        """Around the first advance of a Method 1 / FDM model: one line if its kernels compile now (they are
+        not built at install, :data:`gerotor_twin.precompile.DEFAULT_MODELS`); later advances: nothing."""
+        if self._announced:
+            return contextlib.nullcontext()
+        self._announced = True
+        return announce_compilation(f"gerotor_twin: compiling the {self.bearing_name} gear model on its first use "
+                                    "(once: seconds to half a minute; cached after) ...")
 
     def gaps(self, theta: float, e) -> tuple[np.ndarray, float, int]:
         """Tooth-tip gaps [m] at shaft angle θ [rad] for an outer-gear displacement e [m] (sec. 3.7 rule).

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gerotor_twin.resources import resource_path
 from gerotor_twin.units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 
 __all__ = ["run", "main", "topic_bytes"]
@@ -42,9 +43,8 @@ _INPUTS = ("shaft_speed", "delivery_pressure")      # the bench's two required i
 
 
 def _start_node(tmp: Path, domain: int, overrides: list[str]) -> subprocess.Popen:
-    root = Path(__file__).resolve().parents[2]
     args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
-            str(root / "config" / "twin.yaml"), "-p", f"log_dir:={tmp / 'log'}"]
+            str(resource_path("config", "twin.yaml")), "-p", f"log_dir:={tmp / 'log'}"]
     for o in overrides:
         args += ["-p", o]
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")

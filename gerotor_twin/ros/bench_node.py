@@ -44,6 +44,8 @@ import threading
 import time
 from pathlib import Path
 
+from gerotor_twin.resources import resource_path
+
 __all__ = ["cmd_bench_node", "run"]
 
 
@@ -82,10 +84,9 @@ def _thread_cpu_s(pid: int) -> dict[str, float]:
 
 
 def _start(tmp: Path, model: str, log_name: str, params: tuple = ()) -> tuple[subprocess.Popen, float, Path]:
-    root = Path(__file__).resolve().parents[2]
     log = tmp / log_name
     args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file",
-            str(root / "config" / "twin.yaml"), "-p", f"log_dir:={tmp}", "-p", f"bearing_model:={model}"]
+            str(resource_path("config", "twin.yaml")), "-p", f"log_dir:={tmp}", "-p", f"bearing_model:={model}"]
     for p in params:
         args += ["-p", p]
     env = dict(os.environ, ROS_DOMAIN_ID=str(_domain()), PYTHONUNBUFFERED="1")

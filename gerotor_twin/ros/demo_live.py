@@ -24,9 +24,8 @@ import threading
 import time
 from pathlib import Path
 
+from gerotor_twin.resources import resource_path
 from gerotor_twin.units import m3s_to_lpm
-
-ROOT = Path(__file__).resolve().parent.parent.parent
 
 __all__ = ["main"]
 
@@ -58,8 +57,9 @@ def _compile_kernels(model: str) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m gerotor_twin.ros.demo_live", description=__doc__.splitlines()[0])
-    ap.add_argument("--bag", default=str(ROOT / "bags" / "bench_transient.mcap"))
-    ap.add_argument("--out", default=str(ROOT / "out" / "demo"))
+    ap.add_argument("--bag", default=str(resource_path("bags", "bench_transient.mcap")),
+                    help="bench recording to replay (default: the packaged bags/bench_transient.mcap)")
+    ap.add_argument("--out", default="out/demo", help="output directory (default: %(default)s)")
     ap.add_argument("--model", default="mobility")
     ap.add_argument("--rate", type=float, default=1.0)
     ap.add_argument("--domain-id", type=int, default=None,
@@ -70,7 +70,7 @@ def main(argv=None) -> int:
         from gerotor_twin.ros.domain import claim_domain
         env_id = os.environ.get("GEROTOR_TWIN_DEMO_DOMAIN")
         args.domain_id = int(env_id) if env_id else claim_domain()
-    out = Path(args.out)
+    out = Path(args.out).resolve()
     log_dir = out / "log"
     log_dir.mkdir(parents=True, exist_ok=True)
     before = set(log_dir.glob("*.mcap"))
@@ -82,11 +82,11 @@ def main(argv=None) -> int:
     print(f"demo: twin node ({args.model}, use_sim_time) + replay of {args.bag} in real time "
           f"(ROS_DOMAIN_ID={args.domain_id})", flush=True)
     node = subprocess.Popen(
-        [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file", str(ROOT / "config" / "twin.yaml"),
+        [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file", str(resource_path("config", "twin.yaml")),
          "-p", "use_sim_time:=true", "-p", f"log_dir:={log_dir}", "-p", f"bearing_model:={args.model}",
          # a short showcase: log every output (the defaults decimate them for hours-long runs)
          "-p", "log_outputs_every:=1", "-p", "log_waveform_every:=1", "-p", "log_diagnostics_every:=1"],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []
     ready = threading.Event()
     threading.Thread(target=_pump, args=(node.stdout, lines, ready, args.verbose), daemon=True).start()
@@ -98,7 +98,7 @@ def main(argv=None) -> int:
         print(f"demo: node {startup[startup.find('ready in'):]}", flush=True)
         rep = subprocess.run([sys.executable, "-m", "gerotor_twin", "replay", args.bag, "--rate", str(args.rate),
                               "--clock-rate", "50", "--delay", "0.5", "--wait-subscribers", "1"],
-                             cwd=ROOT, env=env)
+                             env=env)
         if rep.returncode != 0:
             print("demo: replay failed", file=sys.stderr)
             return 1
