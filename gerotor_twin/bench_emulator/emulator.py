@@ -39,6 +39,7 @@ from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
 from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
 from .profiles import Profile
+from .bench_pump import BenchPump
 from .sensors import BenchSpec, Encoder, FirstOrderLag, OilBath, noise_streams
 
 __all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "oil_bath", "synthesize"]
@@ -61,16 +62,30 @@ SHAFT_JOINT = "pump_shaft"
 EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density", "rate_fraction": 0.0}
 
 
-def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
-    """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-],
-    integrated with :data:`EMULATOR_NUMERICS`."""
+def emulated_config(config: PumpConfig, factor: float, bench_pump: BenchPump | None = None) -> PumpConfig:
+    """The emulated pump: ``config`` with the deviations of ``bench_pump`` (if any), then tooth-tip and
+    lateral clearances multiplied by ``factor`` [-], integrated with :data:`EMULATOR_NUMERICS`.
+
+    Raises
+    ------
+    InputError
+        ``factor`` outside [0.5, 2], or a deviation that makes the config invalid (its field named,
+        with the bench pump's name).
+    """
     if not (math.isfinite(factor) and 0.5 <= factor <= 2.0):
         raise InputError("clearance_factor", factor, "[0.5, 2]")
     raw = config.to_dict()
+    label = f"clearances x{factor:g}"
+    if bench_pump is not None:
+        raw = bench_pump.emulated_raw(raw)
+        label = f"bench pump {bench_pump.name}, " + label
     raw["clearances"]["tooth_tip_m"] *= factor
     raw["clearances"]["lateral_m"] *= factor
     raw["numerics"].update(EMULATOR_NUMERICS)
-    return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
+    try:
+        return parse_config(raw, source=f"{config.source} ({label})")
+    except InputError as e:
+        raise InputError(f"emulated pump ({label}) {e.field}", e.value, e.allowed, e.reason) from None
 
 
 def oil_bath(profile: Profile, spec: BenchSpec) -> OilBath:
@@ -95,6 +110,21 @@ def profile_metadata(profile: Profile) -> dict[str, str]:
     return meta if not profile.source else {**meta, "profile_file_text": profile.source}
 
 
+def file_metadata(profile: Profile, spec: BenchSpec, cfg: PumpConfig, command: str,
+                  bench_pump: BenchPump | None) -> dict[str, dict[str, str]]:
+    """The file's metadata record :data:`EMULATOR_METADATA`: the profile, the emulator settings, the
+    command, the emulated pump's config and, with a bench pump, its resolved description (YAML: every
+    value used) and the file's text."""
+    meta = {"synthetic": "true", **profile_metadata(profile),
+            "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
+            "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}
+    if bench_pump is not None:
+        meta["bench_pump"] = yaml.safe_dump(bench_pump.as_dict(), sort_keys=False, allow_unicode=True)
+        if bench_pump.source:
+            meta["bench_pump_file_text"] = bench_pump.source
+    return {EMULATOR_METADATA: meta}
+
+
 def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Callable[[float], None]:
     wall0 = time.monotonic()
     last = [-1.0]
@@ -114,7 +144,8 @@ def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Cal
 
 
 def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, config: PumpConfig | None = None,
-               overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr) -> dict:
+               overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr,
+               bench_pump: BenchPump | None = None) -> dict:
     """Run the emulated bench along ``profile`` and record it to MCAP.
 
     Parameters
@@ -125,7 +156,8 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     output : path or binary stream
         MCAP file to create (or a stream such as ``io.BytesIO``).
     spec : BenchSpec
-        Emulator and sensor parameters, including the seed.
+        Emulator and sensor parameters, including the seed (for a bench pump:
+        ``bench_pump.bench_spec(...)``, its sensors and no common clearance factor).
     config : PumpConfig, optional
         Nominal pump (default ``config/pump.yaml``); the emulated pump derives from it.
     overwrite : bool
@@ -134,6 +166,9 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         The command line, stored in the file's metadata.
     progress : text stream or None
         Where to print progress (default stderr).
+    bench_pump : BenchPump, optional
+        How the emulated pump differs from ``config`` in form (:mod:`.bench_pump`); its deviations
+        come before ``spec.clearance_factor``, and its resolved description goes into the metadata.
 
     Returns
     -------
@@ -145,7 +180,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         raise InputError("bearing", spec.bearing, " | ".join(BEARING_MODELS))
     nominal = config or load_config()
     profile.check_within(nominal.range)
-    cfg = emulated_config(nominal, spec.clearance_factor)
+    cfg = emulated_config(nominal, spec.clearance_factor, bench_pump)
     model = PumpModel(cfg, spec.bearing)
     dt = 1.0 / spec.internal_rate_hz
     dec = {"speed": spec.decimation(spec.speed_rate_hz, "speed_rate_hz"),
@@ -176,17 +211,15 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     valve = FirstOrderLag(spec.valve_tau_s, dt, sp_p[0])
     ripple_dc = FirstOrderLag(spec.ripple_dc_tau_s, dt, q_dc0)
     p_sensor = FirstOrderLag(spec.pressure_tau_s, dt, p_atm + sp_p[0])
-    s_sensor = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_suction)
+    s_sensor = FirstOrderLag(spec.suction_tau_s, dt, inp.p_suction)
+    w_sensor = FirstOrderLag(spec.speed_tau_s, dt, inp.omega)
     flow_meter = FirstOrderLag(spec.flow_tau_s, dt, q_dc0)
     thermo = FirstOrderLag(spec.temperature_tau_s, dt, bath.start_c)
     encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))), dt,
                       state.theta, inp.omega)
 
-    meta = {EMULATOR_METADATA: {
-        "synthetic": "true", **profile_metadata(profile),
-        "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
-        "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}}
-    log = McapLog(output, metadata=meta, overwrite=overwrite)
+    resolved = None if bench_pump is None else bench_pump.resolved(nominal, spec)
+    log = McapLog(output, metadata=file_metadata(profile, spec, cfg, command, resolved), overwrite=overwrite)
     for topic, msgtype in BENCH_TOPICS.items():
         log.add_topic(topic, msgtype, qos="sensor")
     show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
@@ -217,24 +250,28 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
             s_meas = s_sensor(ps - 0.1 * spec.ripple_impedance * (q_inst - ripple_dc.y))
             q_meas = flow_meter(q_mean)
             temp = thermo(kelvin_to_celsius(t_oil))
-            w_meas, angle = encoder(state.theta)
+            w_enc, angle = encoder(state.theta)
+            w_meas = w_sensor(w_enc)
             i = k + 1
             if i % dec["speed"] == 0:
+                w_meas += spec.speed_bias_rad_s + (rng["speed"].normal(0.0, spec.speed_noise_rad_s)
+                                                   if spec.speed_noise_rad_s > 0 else 0.0)
                 emit("/bench/shaft_speed", m.joint_state(t_ns, name=[SHAFT_JOINT], position=[angle],
                                                          velocity=[w_meas]), t_ns)
             if i % dec["pressure"] == 0:
                 emit("/bench/delivery_pressure", m.fluid_pressure(
-                    t_ns, p_meas + rng["pressure"].normal(0.0, spec.pressure_noise_pa),
+                    t_ns, p_meas + spec.pressure_bias_pa + rng["pressure"].normal(0.0, spec.pressure_noise_pa),
                     variance=spec.pressure_noise_pa ** 2), t_ns)
                 emit("/bench/suction_pressure", m.fluid_pressure(
                     t_ns, s_meas + rng["suction"].normal(0.0, spec.suction_noise_pa),
                     variance=spec.suction_noise_pa ** 2), t_ns)
             if i % dec["flow"] == 0:
                 sigma = math.hypot(spec.flow_noise_rel * q_meas, spec.flow_noise_m3s)
-                emit("/bench/delivery_flow", m.float64(q_meas + rng["flow"].normal(0.0, sigma)), t_ns)
+                emit("/bench/delivery_flow", m.float64(q_meas + spec.flow_bias_m3s + rng["flow"].normal(0.0, sigma)),
+                     t_ns)
             if i % dec["temperature"] == 0:
                 emit("/bench/oil_temperature", m.temperature(
-                    t_ns, temp + rng["temperature"].normal(0.0, spec.temperature_noise_c),
+                    t_ns, temp + spec.temperature_bias_c + rng["temperature"].normal(0.0, spec.temperature_noise_c),
                     variance=spec.temperature_noise_c ** 2), t_ns)
             show(t)
     finally:
