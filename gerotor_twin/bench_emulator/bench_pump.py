@@ -180,14 +180,16 @@ def _value(value, field_name: str, allowed: tuple):
     return check_range(field_name, value, lo, hi, unit=unit)
 
 
-def _mapping(raw, field_name: str, keys) -> dict:
-    """``raw`` as a mapping whose keys are all in ``keys``."""
+def _mapping(raw, field_name: str, keys, key_prefix: str | None = None) -> dict:
+    """``raw`` as a mapping whose keys are all in ``keys`` (an unknown key is named ``key_prefix`` + key,
+    by default ``field_name.key``)."""
     keys = sorted(keys)
     if not isinstance(raw, dict):
         raise InputError(field_name, raw, f"a mapping with keys {', '.join(keys)}")
     unknown = sorted(str(k) for k in raw if k not in keys)
     if unknown:
-        raise InputError(f"{field_name}.{unknown[0]}", raw.get(unknown[0]), f"one of the keys {', '.join(keys)}",
+        prefix = f"{field_name}." if key_prefix is None else key_prefix
+        raise InputError(f"{prefix}{unknown[0]}", raw.get(unknown[0]), f"one of the keys {', '.join(keys)}",
                          "unknown key")
     return raw
 
@@ -220,7 +222,7 @@ def parse_bench_pump(raw, name: str = "bench_pump", where: str = "", source: str
     source : str
         Text of the file, kept (and recorded in the bag's metadata).
     """
-    raw = _mapping(raw, f"{where}(document)", _TOP_KEYS)
+    raw = _mapping(raw, f"{where}(document)", _TOP_KEYS, where)
     name = raw.get("name", name)
     if not isinstance(name, str) or not _NAME.match(name):
         raise InputError(f"{where}name", name, "1-64 letters, digits, _ or -")
