@@ -206,3 +206,15 @@ def test_shipped_bench_pumps_load_and_differ_in_kind(cfg):
                       and v not in (None, 1.0, 0.0)} | {f"sensor {k}" for k in bp.sensors}
         kinds.append(frozenset(set_fields))
     assert len(set(kinds)) == len(kinds)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_each_shipped_bench_pump_runs(path):
+    """Each shipped bench pump runs through the emulator (0.4 s test profile), records all bench topics
+    and its own name in the metadata, and delivers less than the theoretical flow."""
+    bp = load_bench_pump(path)
+    data, res = _run(bp)
+    assert all(n > 0 for n in res["message_counts"].values())
+    assert yaml.safe_load(metadata(data)[EMULATOR_METADATA]["bench_pump"])["name"] == bp.name
+    q = _samples(data)["/bench/delivery_flow"][1]
+    assert np.all((q > 0.5 * 22.78e-6 * 1000 / 60) & (q < 22.78e-6 * 1000 / 60))
