@@ -79,6 +79,8 @@ SENSOR_FIELDS: dict[str, tuple[str, tuple]] = {
     "oil_temperature.tau_s": ("temperature_tau_s", (0.0, 600.0, "s")),
     "oil_temperature.noise_c": ("temperature_noise_c", (0.0, 5.0, "K")),
 }
+#: Sections of ``pump`` whose keys replace the nominal config's keys of the same section and name.
+_REPLACED_SECTIONS = ("orifice", "mixture", "leakage")
 _TOP_KEYS = ("name", "description", "pump", "sensors")
 _NAME = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 _MAX_DESCRIPTION = 400
@@ -134,14 +136,9 @@ class BenchPump:
         c["tooth_tip_m"] *= self.tooth_tip_factor
         c["lateral_m"] *= self.lateral_factor
         c["housing_radial_m"] *= self.housing_factor
-        for key, attr in (("law", "orifice_law"), ("cd_max", "cd_max"), ("lambda_crit", "lambda_crit"),
-                          ("laminar_delta", "laminar_delta")):
+        for (section, key), attr in _replaced().items():
             if getattr(self, attr) is not None:
-                raw["orifice"][key] = getattr(self, attr)
-        if self.air_fraction is not None:
-            raw["mixture"]["air_fraction"] = self.air_fraction
-        if self.tip_dh is not None:
-            raw["leakage"]["tip_dh"] = self.tip_dh
+                raw[section][key] = getattr(self, attr)
         for port in raw["ports"].values():
             port["start_deg"] += self.port_timing_offset_deg
             port["end_deg"] += self.port_timing_offset_deg
@@ -150,10 +147,9 @@ class BenchPump:
     def resolved(self, nominal, spec: BenchSpec) -> "BenchPump":
         """Every field filled with the value used: the nominal config's (a ``PumpConfig``) where
         this pump leaves it out, and every sensor setting of ``spec``."""
-        from_config = {"orifice_law": nominal.orifice.law, "cd_max": nominal.orifice.cd_max,
-                       "lambda_crit": nominal.orifice.lambda_crit, "laminar_delta": nominal.orifice.laminar_delta,
-                       "air_fraction": nominal.air.air_fraction, "tip_dh": nominal.tip_dh}
-        filled = {k: v for k, v in from_config.items() if getattr(self, k) is None}
+        raw = nominal.to_dict()
+        filled = {attr: raw[section][key] for (section, key), attr in _replaced().items()
+                  if getattr(self, attr) is None}
         sensors = {attr: getattr(spec, attr) for attr, _ in SENSOR_FIELDS.values()}
         return replace(self, **filled, sensors=sensors)
 
@@ -166,6 +162,13 @@ class BenchPump:
                     section, key = path.split(".")
                     out[where].setdefault(section, {})[key] = values[attr]
         return out
+
+
+def _replaced() -> dict[tuple[str, str], str]:
+    """(config section, key) → attribute, for the pump fields that replace the config's value of the
+    same name (``orifice``, ``mixture``, ``leakage``)."""
+    return {tuple(path.split(".")): attr for path, (attr, _) in PUMP_FIELDS.items()
+            if path.split(".")[0] in _REPLACED_SECTIONS}
 
 
 def _value(value, field_name: str, allowed: tuple):
