@@ -180,13 +180,18 @@ def test_unknown_keys_and_types_are_refused(raw, needle):
 
 
 def test_cli_errors_are_one_line(tmp_path, capsys):
-    """Bad input: a bad bench pump file, a missing file, and --clearance-factor together with --bench-pump
-    each give one line on stderr and exit 2."""
+    """Bad input: a bad bench pump file, a missing file, a directory, an alias bomb, and --clearance-factor
+    together with --bench-pump each give one line on stderr and exit 2."""
     bad = tmp_path / "bad.yaml"
     bad.write_text("pump:\n  ports: {timing_offset_deg: 9}\n")
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text('a0: &a0 ["x"]\n' + "".join(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]\n"
+                                                for i in range(1, 12)))
     good = SHIPPED[0]
     for args, needle in ((["--bench-pump", str(bad)], "pump.ports.timing_offset_deg = 9"),
                          (["--bench-pump", str(tmp_path / "none.yaml")], "--bench-pump"),
+                         (["--bench-pump", str(tmp_path)], "--bench-pump"),
+                         (["--bench-pump", str(bomb)], "--bench-pump"),
                          (["--bench-pump", str(good), "--clearance-factor", "1.2"], "--clearance-factor = 1.2")):
         assert main(["synth-bench", "--profile", "test", "-o", str(tmp_path / "x.mcap"), "--quiet", *args]) == 2
         err = capsys.readouterr().err.strip().splitlines()
