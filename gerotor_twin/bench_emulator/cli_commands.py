@@ -37,32 +37,53 @@ def _profile(args, config):
     return get_profile(args.profile or "transient", config.range)
 
 
-def cmd_synth_bench(args) -> int:
-    from gerotor_twin.bench_emulator import BenchSpec, synthesize
-    from gerotor_twin.bench_emulator.emulator import default_output_name
-    from gerotor_twin.config import load_config
+def _spec(args, bench_pump):
+    """The emulator settings of the command line; a bench pump's sensors and clearances on top."""
+    from gerotor_twin.bench_emulator import BenchSpec
 
-    config = load_config(args.config)
-    profile = _profile(args, config)
-    spec = BenchSpec(seed=args.seed, bearing=args.bearing, clearance_factor=args.clearance_factor,
+    if bench_pump is not None and args.clearance_factor is not None:
+        raise InputError("--clearance-factor", args.clearance_factor, "not with --bench-pump",
+                         "the bench pump's pump.clearance_factors set each path")
+    factor = BenchSpec.clearance_factor if args.clearance_factor is None else args.clearance_factor
+    spec = BenchSpec(seed=args.seed, bearing=args.bearing, clearance_factor=factor,
                      speed_rate_hz=args.speed_rate, pressure_rate_hz=args.pressure_rate,
                      flow_rate_hz=args.flow_rate, temperature_rate_hz=args.temperature_rate,
                      wear_clearance_factor_end=args.wear_to, wear_start_s=args.wear_start)
-    out = Path(args.output) if args.output else default_output_name(profile)
-    if out.exists() and not args.overwrite:
-        raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    return spec if bench_pump is None else bench_pump.bench_spec(spec)
+
+
+def _command(args, spec, profile, out: Path) -> str:
+    """The command line stored in the file: every setting spelled out."""
     which = ["--profile-file", args.profile_file] if args.profile_file is not None else ["--profile", profile.name]
+    pump = (["--bench-pump", args.bench_pump] if args.bench_pump is not None
+            else ["--clearance-factor", f"{spec.clearance_factor:g}"])
     command = shlex.join(["gerotor-twin", "synth-bench", *which, "-o", str(out),
-                          "--seed", str(spec.seed), "--bearing", spec.bearing,
-                          "--clearance-factor", f"{spec.clearance_factor:g}",
+                          "--seed", str(spec.seed), "--bearing", spec.bearing, *pump,
                           "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
                           "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
                           f"{spec.temperature_rate_hz:g}"] + _wear_args(spec))
     if args.config:
         command += " --config " + shlex.quote(args.config)
+    return command
+
+
+def cmd_synth_bench(args) -> int:
+    from gerotor_twin.bench_emulator import synthesize
+    from gerotor_twin.bench_emulator.bench_pump import load_bench_pump
+    from gerotor_twin.bench_emulator.emulator import default_output_name
+    from gerotor_twin.config import load_config
+
+    config = load_config(args.config)
+    profile = _profile(args, config)
+    bench_pump = None if args.bench_pump is None else load_bench_pump(args.bench_pump)
+    spec = _spec(args, bench_pump)
+    out = Path(args.output) if args.output else default_output_name(profile)
+    if out.exists() and not args.overwrite:
+        raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    command = _command(args, spec, profile, out)
     res = synthesize(profile, out, spec, config=config, overwrite=args.overwrite, command=command,
-                     progress=None if args.quiet else sys.stderr)
+                     progress=None if args.quiet else sys.stderr, bench_pump=bench_pump)
     n = sum(res["message_counts"].values())
     print(f"wrote {out} ({out.stat().st_size / 1e6:.2f} MB, {n} messages, {res['duration_s']:.1f} s, "
           f"seed {spec.seed})")
@@ -90,8 +111,12 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", help="MCAP file (default bags/bench_<profile name>.mcap)")
     p.add_argument("--seed", type=int, default=20240601, help="noise seed (default 20240601)")
     p.add_argument("--bearing", default="short", help="outer-gear model of the emulated pump (default short)")
-    p.add_argument("--clearance-factor", type=float, default=1.10,
-                   help="tooth-tip and lateral clearances x nominal (default 1.10)")
+    p.add_argument("--clearance-factor", type=float, default=None,
+                   help="tooth-tip and lateral clearances x nominal (default 1.10; not with --bench-pump)")
+    p.add_argument("--bench-pump", metavar="F",
+                   help="a bench pump YAML: how the emulated pump and its sensors differ from the twin in form "
+                        "(per-path clearances, orifice law, air, tip-gap law, port timing, sensor bias/lag/noise; "
+                        "docs/calibration_health.md, config/bench_pumps/)")
     p.add_argument("--speed-rate", type=float, default=100.0, help="shaft speed rate [Hz] (default 100)")
     p.add_argument("--pressure-rate", type=float, default=100.0, help="pressure rate [Hz] (default 100)")
     p.add_argument("--flow-rate", type=float, default=20.0, help="flow meter rate [Hz] (default 20)")

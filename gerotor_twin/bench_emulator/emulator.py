@@ -39,9 +39,10 @@ from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
 from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
 from .profiles import Profile
+from .bench_pump import BenchPump
 from .sensors import BenchSpec, Encoder, FirstOrderLag, OilBath, noise_streams
 
-__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "emulated_config", "oil_bath", "synthesize"]
+__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "BenchSensors", "emulated_config", "oil_bath", "synthesize"]
 
 #: Topics and types written (DESIGN.md, bench inputs of the twin).
 BENCH_TOPICS = {
@@ -61,16 +62,30 @@ SHAFT_JOINT = "pump_shaft"
 EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density", "rate_fraction": 0.0}
 
 
-def emulated_config(config: PumpConfig, factor: float) -> PumpConfig:
-    """``config`` with tooth-tip and lateral clearances multiplied by ``factor`` [-],
-    integrated with :data:`EMULATOR_NUMERICS`."""
+def emulated_config(config: PumpConfig, factor: float, bench_pump: BenchPump | None = None) -> PumpConfig:
+    """The emulated pump: ``config`` with the deviations of ``bench_pump`` (if any), then tooth-tip and
+    lateral clearances multiplied by ``factor`` [-], integrated with :data:`EMULATOR_NUMERICS`.
+
+    Raises
+    ------
+    InputError
+        ``factor`` outside [0.5, 2], or a deviation that makes the config invalid (its field named,
+        with the bench pump's name).
+    """
     if not (math.isfinite(factor) and 0.5 <= factor <= 2.0):
         raise InputError("clearance_factor", factor, "[0.5, 2]")
     raw = config.to_dict()
+    label = f"clearances x{factor:g}"
+    if bench_pump is not None:
+        raw = bench_pump.emulated_raw(raw)
+        label = f"bench pump {bench_pump.name}, " + label
     raw["clearances"]["tooth_tip_m"] *= factor
     raw["clearances"]["lateral_m"] *= factor
     raw["numerics"].update(EMULATOR_NUMERICS)
-    return parse_config(raw, source=f"{config.source} (clearances x{factor:g})")
+    try:
+        return parse_config(raw, source=f"{config.source} ({label})")
+    except InputError as e:
+        raise InputError(f"emulated pump ({label}) {e.field}", e.value, e.allowed, e.reason) from None
 
 
 def oil_bath(profile: Profile, spec: BenchSpec) -> OilBath:
@@ -95,6 +110,21 @@ def profile_metadata(profile: Profile) -> dict[str, str]:
     return meta if not profile.source else {**meta, "profile_file_text": profile.source}
 
 
+def file_metadata(profile: Profile, spec: BenchSpec, cfg: PumpConfig, command: str,
+                  bench_pump: BenchPump | None) -> dict[str, dict[str, str]]:
+    """The file's metadata record :data:`EMULATOR_METADATA`: the profile, the emulator settings, the
+    command, the emulated pump's config and, with a bench pump, its resolved description (YAML: every
+    value used) and the file's text."""
+    meta = {"synthetic": "true", **profile_metadata(profile),
+            "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
+            "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}
+    if bench_pump is not None:
+        meta["bench_pump"] = yaml.safe_dump(bench_pump.as_dict(), sort_keys=False, allow_unicode=True)
+        if bench_pump.source:
+            meta["bench_pump_file_text"] = bench_pump.source
+    return {EMULATOR_METADATA: meta}
+
+
 def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Callable[[float], None]:
     wall0 = time.monotonic()
     last = [-1.0]
@@ -113,8 +143,87 @@ def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Cal
     return show
 
 
+class BenchSensors:
+    """The bench's sensors, updated once per tick and published at their rates (all SI).
+
+    An encoder (quantized, differenced over ``spec.speed_window_s``) and a speed filter; pressure
+    transducers that see the flow ripple through the delivery-line impedance; a flow meter and a
+    thermometer, each a first-order lag; every published sample adds the sensor's bias and Gaussian
+    noise (:class:`~.sensors.BenchSpec`).
+
+    Parameters
+    ----------
+    spec : BenchSpec
+        Sensor settings, rates and time constants.
+    dt : float
+        Tick [s].
+    rng : dict of numpy.random.Generator
+        Noise streams by sensor (:func:`~.sensors.noise_streams`).
+    emit : callable
+        ``emit(topic, message, stamp_ns)`` records one sample.
+    inp : Inputs
+        Speed [rad/s] and pressures [Pa] at the start of the recording.
+    q0 : float
+        Delivery flow at the start [m³/s].
+    temp0_c : float
+        Oil temperature at the start [°C].
+    theta0 : float
+        Shaft angle at the start [rad].
+    """
+
+    def __init__(self, spec: BenchSpec, dt: float, rng: dict, emit: Callable, inp: Inputs, q0: float,
+                 temp0_c: float, theta0: float):
+        self.spec, self.rng, self.emit = spec, rng, emit
+        self.dec = {"speed": spec.decimation(spec.speed_rate_hz, "speed_rate_hz"),
+                    "pressure": spec.decimation(spec.pressure_rate_hz, "pressure_rate_hz"),
+                    "flow": spec.decimation(spec.flow_rate_hz, "flow_rate_hz"),
+                    "temperature": spec.decimation(spec.temperature_rate_hz, "temperature_rate_hz")}
+        self.ripple_dc = FirstOrderLag(spec.ripple_dc_tau_s, dt, q0)
+        self.delivery = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_delivery)
+        self.suction = FirstOrderLag(spec.suction_tau_s, dt, inp.p_suction)
+        self.speed = FirstOrderLag(spec.speed_tau_s, dt, inp.omega)
+        self.flow = FirstOrderLag(spec.flow_tau_s, dt, q0)
+        self.thermo = FirstOrderLag(spec.temperature_tau_s, dt, temp0_c)
+        self.encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))),
+                               dt, theta0, inp.omega)
+
+    def _noise(self, stream: str, sigma: float) -> float:
+        return self.rng[stream].normal(0.0, sigma)
+
+    def tick(self, i: int, t_ns: int, pd: float, ps: float, q_inst: float, q_mean: float, oil_c: float,
+             theta: float) -> None:
+        """Tick ``i`` (from 1), stamped ``t_ns`` [ns]: the true delivery and suction pressures [Pa],
+        instantaneous and tick-mean delivery flow [m³/s], oil temperature [°C] and shaft angle [rad]."""
+        s, dec = self.spec, self.dec
+        p_meas = self.delivery(pd + s.ripple_impedance * (q_inst - self.ripple_dc(q_mean)))
+        s_meas = self.suction(ps - 0.1 * s.ripple_impedance * (q_inst - self.ripple_dc.y))
+        q_meas = self.flow(q_mean)
+        temp = self.thermo(oil_c)
+        w_enc, angle = self.encoder(theta)
+        w_meas = self.speed(w_enc)
+        if i % dec["speed"] == 0:
+            w_meas += s.speed_bias_rad_s + (self._noise("speed", s.speed_noise_rad_s) if s.speed_noise_rad_s > 0
+                                            else 0.0)
+            self.emit("/bench/shaft_speed", m.joint_state(t_ns, name=[SHAFT_JOINT], position=[angle],
+                                                          velocity=[w_meas]), t_ns)
+        if i % dec["pressure"] == 0:
+            self.emit("/bench/delivery_pressure", m.fluid_pressure(
+                t_ns, p_meas + s.pressure_bias_pa + self._noise("pressure", s.pressure_noise_pa),
+                variance=s.pressure_noise_pa ** 2), t_ns)
+            self.emit("/bench/suction_pressure", m.fluid_pressure(
+                t_ns, s_meas + self._noise("suction", s.suction_noise_pa), variance=s.suction_noise_pa ** 2), t_ns)
+        if i % dec["flow"] == 0:
+            sigma = math.hypot(s.flow_noise_rel * q_meas, s.flow_noise_m3s)
+            self.emit("/bench/delivery_flow", m.float64(q_meas + s.flow_bias_m3s + self._noise("flow", sigma)), t_ns)
+        if i % dec["temperature"] == 0:
+            self.emit("/bench/oil_temperature", m.temperature(
+                t_ns, temp + s.temperature_bias_c + self._noise("temperature", s.temperature_noise_c),
+                variance=s.temperature_noise_c ** 2), t_ns)
+
+
 def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, config: PumpConfig | None = None,
-               overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr) -> dict:
+               overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr,
+               bench_pump: BenchPump | None = None) -> dict:
     """Run the emulated bench along ``profile`` and record it to MCAP.
 
     Parameters
@@ -125,7 +234,8 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     output : path or binary stream
         MCAP file to create (or a stream such as ``io.BytesIO``).
     spec : BenchSpec
-        Emulator and sensor parameters, including the seed.
+        Emulator and sensor parameters, including the seed (for a bench pump:
+        ``bench_pump.bench_spec(...)``, its sensors and no common clearance factor).
     config : PumpConfig, optional
         Nominal pump (default ``config/pump.yaml``); the emulated pump derives from it.
     overwrite : bool
@@ -134,6 +244,9 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         The command line, stored in the file's metadata.
     progress : text stream or None
         Where to print progress (default stderr).
+    bench_pump : BenchPump, optional
+        How the emulated pump differs from ``config`` in form (:mod:`.bench_pump`); its deviations
+        come before ``spec.clearance_factor``, and its resolved description goes into the metadata.
 
     Returns
     -------
@@ -145,13 +258,12 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         raise InputError("bearing", spec.bearing, " | ".join(BEARING_MODELS))
     nominal = config or load_config()
     profile.check_within(nominal.range)
-    cfg = emulated_config(nominal, spec.clearance_factor)
+    cfg = emulated_config(nominal, spec.clearance_factor, bench_pump)
     model = PumpModel(cfg, spec.bearing)
     dt = 1.0 / spec.internal_rate_hz
-    dec = {"speed": spec.decimation(spec.speed_rate_hz, "speed_rate_hz"),
-           "pressure": spec.decimation(spec.pressure_rate_hz, "pressure_rate_hz"),
-           "flow": spec.decimation(spec.flow_rate_hz, "flow_rate_hz"),
-           "temperature": spec.decimation(spec.temperature_rate_hz, "temperature_rate_hz")}
+    for rate, name in ((spec.speed_rate_hz, "speed_rate_hz"), (spec.pressure_rate_hz, "pressure_rate_hz"),
+                       (spec.flow_rate_hz, "flow_rate_hz"), (spec.temperature_rate_hz, "temperature_rate_hz")):
+        spec.decimation(rate, name)                     # a bad rate refused before any work
     n_ticks = int(round(profile.duration_s * spec.internal_rate_hz))
     t_grid = np.arange(n_ticks + 1) * dt
     sp_w, sp_p = profile.setpoints(t_grid)
@@ -174,19 +286,9 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
     motor = FirstOrderLag(spec.motor_tau_s, dt, sp_w[0])
     valve = FirstOrderLag(spec.valve_tau_s, dt, sp_p[0])
-    ripple_dc = FirstOrderLag(spec.ripple_dc_tau_s, dt, q_dc0)
-    p_sensor = FirstOrderLag(spec.pressure_tau_s, dt, p_atm + sp_p[0])
-    s_sensor = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_suction)
-    flow_meter = FirstOrderLag(spec.flow_tau_s, dt, q_dc0)
-    thermo = FirstOrderLag(spec.temperature_tau_s, dt, bath.start_c)
-    encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))), dt,
-                      state.theta, inp.omega)
 
-    meta = {EMULATOR_METADATA: {
-        "synthetic": "true", **profile_metadata(profile),
-        "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
-        "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}}
-    log = McapLog(output, metadata=meta, overwrite=overwrite)
+    resolved = None if bench_pump is None else bench_pump.resolved(nominal, spec)
+    log = McapLog(output, metadata=file_metadata(profile, spec, cfg, command, resolved), overwrite=overwrite)
     for topic, msgtype in BENCH_TOPICS.items():
         log.add_topic(topic, msgtype, qos="sensor")
     show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
@@ -200,6 +302,7 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         lat = spec.latency_s + rng["latency"].exponential(spec.latency_jitter_s)
         log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
 
+    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, bath.start_c, state.theta)
     try:
         for k in range(n_ticks):
             true_c[k] = apply_wear(model, cfg, spec, dt, profile.duration_s, k)
@@ -208,34 +311,11 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
             ps = suction(w)
             t_oil = oil_k(k * dt)
             state, out = model.advance(state, dt, Inputs(w, ps, pd, t_oil))
-            q_inst = float(out.delivery_flow[-1])
             q_mean = tick_mean_flow(out)
             true_q[k], true_w[k], true_t[k] = q_mean, w, kelvin_to_celsius(t_oil)
             t = (k + 1) * dt
-            t_ns = t0_ns + int(round(t * 1e9))
-            p_meas = p_sensor(pd + spec.ripple_impedance * (q_inst - ripple_dc(q_mean)))
-            s_meas = s_sensor(ps - 0.1 * spec.ripple_impedance * (q_inst - ripple_dc.y))
-            q_meas = flow_meter(q_mean)
-            temp = thermo(kelvin_to_celsius(t_oil))
-            w_meas, angle = encoder(state.theta)
-            i = k + 1
-            if i % dec["speed"] == 0:
-                emit("/bench/shaft_speed", m.joint_state(t_ns, name=[SHAFT_JOINT], position=[angle],
-                                                         velocity=[w_meas]), t_ns)
-            if i % dec["pressure"] == 0:
-                emit("/bench/delivery_pressure", m.fluid_pressure(
-                    t_ns, p_meas + rng["pressure"].normal(0.0, spec.pressure_noise_pa),
-                    variance=spec.pressure_noise_pa ** 2), t_ns)
-                emit("/bench/suction_pressure", m.fluid_pressure(
-                    t_ns, s_meas + rng["suction"].normal(0.0, spec.suction_noise_pa),
-                    variance=spec.suction_noise_pa ** 2), t_ns)
-            if i % dec["flow"] == 0:
-                sigma = math.hypot(spec.flow_noise_rel * q_meas, spec.flow_noise_m3s)
-                emit("/bench/delivery_flow", m.float64(q_meas + rng["flow"].normal(0.0, sigma)), t_ns)
-            if i % dec["temperature"] == 0:
-                emit("/bench/oil_temperature", m.temperature(
-                    t_ns, temp + rng["temperature"].normal(0.0, spec.temperature_noise_c),
-                    variance=spec.temperature_noise_c ** 2), t_ns)
+            sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), pd, ps, float(out.delivery_flow[-1]), q_mean,
+                         true_t[k], state.theta)
             show(t)
     finally:
         counts = log.message_counts

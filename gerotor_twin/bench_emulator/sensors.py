@@ -38,8 +38,13 @@ class BenchSpec:
         Shaft encoder counts per revolution (quadrature edges) [-].
     speed_window_s : float
         Encoder differencing window of the speed measurement [s].
-    pressure_tau_s : float
-        Pressure transducer time constant [s].
+    speed_bias_rad_s, speed_tau_s, speed_noise_rad_s : float
+        Shaft-speed reading after the encoder: bias [rad/s], first-order lag [s] (0: none) and noise
+        (standard deviation) [rad/s].
+    pressure_tau_s, suction_tau_s : float
+        Delivery and suction pressure transducer time constants [s].
+    pressure_bias_pa : float
+        Bias of the delivery pressure transducer [Pa].
     pressure_noise_pa, suction_noise_pa : float
         Standard deviation of transducer noise [Pa].
     ripple_impedance : float
@@ -52,6 +57,8 @@ class BenchSpec:
         Flow-meter time constant [s].
     flow_noise_rel, flow_noise_m3s : float
         Flow-meter noise: relative to the reading [-] and absolute [m³/s] (standard deviations).
+    flow_bias_m3s : float
+        Flow-meter bias [m³/s].
     temperature_start_c, temperature_end_c, temperature_warmup_tau_s : float
         Oil warm-up of the emulated bench: the true oil temperature (which the
         emulated pump runs at) rises from the start value towards the end value
@@ -59,8 +66,8 @@ class BenchSpec:
         (:func:`oil_warmup`).  A profile that sets ``oil_temperature_c`` replaces the
         end value by its set-point from that segment on, and the start value by the
         first segment's set-point if it has one (:class:`OilBath`); τ_warm stays.
-    temperature_tau_s, temperature_noise_c : float
-        Thermometer time constant [s] and noise [K].
+    temperature_tau_s, temperature_noise_c, temperature_bias_c : float
+        Thermometer time constant [s], noise [K] and bias [K].
     latency_s, latency_jitter_s : float
         Receive latency of the recorder (log time − stamp): fixed part and mean of an exponential [s].
     wear_clearance_factor_end : float
@@ -85,7 +92,12 @@ class BenchSpec:
     valve_tau_s: float = 0.08
     encoder_counts: int = 16384
     speed_window_s: float = 0.01
+    speed_bias_rad_s: float = 0.0
+    speed_tau_s: float = 0.0
+    speed_noise_rad_s: float = 0.0
     pressure_tau_s: float = 0.5e-3
+    suction_tau_s: float = 0.5e-3
+    pressure_bias_pa: float = 0.0
     pressure_noise_pa: float = 2000.0
     suction_noise_pa: float = 300.0
     ripple_impedance: float = 1.0e8
@@ -94,11 +106,13 @@ class BenchSpec:
     flow_tau_s: float = 0.2
     flow_noise_rel: float = 0.003
     flow_noise_m3s: float = 1.0e-6
+    flow_bias_m3s: float = 0.0
     temperature_start_c: float = 30.0
     temperature_end_c: float = 70.0
     temperature_warmup_tau_s: float = 90.0
     temperature_tau_s: float = 3.0
     temperature_noise_c: float = 0.05
+    temperature_bias_c: float = 0.0
     latency_s: float = 0.3e-3
     latency_jitter_s: float = 0.2e-3
     warmup_s: float = 0.3
@@ -209,7 +223,10 @@ class FirstOrderLag:
         self.y = float(y0)
 
     def __call__(self, u: float) -> float:
-        self.y += self.a * (u - self.y)
+        if self.a == 1.0:              # no lag: the input itself, exactly
+            self.y = float(u)
+        else:
+            self.y += self.a * (u - self.y)
         return self.y
 
 
