@@ -45,7 +45,7 @@ def test_html_is_self_contained_with_every_figure(report):
         assert f'<div class="ts-panel" id="{tid}"></div>' in page, tid
     assert not re.search(r'(src|href)="(https?:)?//', page) and "<link" not in page
     assert "<script src" not in page and "@import" not in page
-    assert page.count("<table class='metrics'") == 3        # summary + one plateau table per twin
+    assert page.count("<table class='metrics'") == 4        # summary, verdicts side by side, one plateau table per twin
 
 
 def test_json_metrics(report):
