@@ -200,7 +200,7 @@ def test_headless_chromium_renders_every_plot(report):
     zmin, zmax, want_min, want_max = res["zoomSync"]
     assert zmin == pytest.approx(want_min) and zmax == pytest.approx(want_max)
     assert {a["name"] for a in res["links"]} == {"report_aligned.csv", "report_summary.csv", "report_plateaus_a.csv",
-                                                 "report_plateaus_b.csv"}
+                                                 "report_plateaus_b.csv", "report_verdicts_side_by_side.csv"}
     assert all(a["href"].startswith("data:text/csv") for a in res["links"])
     assert res["resources"] == []
 
