@@ -2,7 +2,7 @@
 from pathlib import Path
 
 from gerotor_twin.report.build import build_report
-from gerotor_twin.ros.demo_live import FITTED, LABELS, calibration_note, plateau_lines
+from gerotor_twin.ros.demo_live import build_parser, calibration_note, labels, plateau_lines
 from report_helpers import write_bench, write_twin
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -14,7 +14,7 @@ def test_plateau_lines_show_both_twins_and_their_verdicts(tmp_path):
     both verdict sets side by side."""
     b = write_bench(tmp_path / "b.mcap")
     logs = [write_twin(tmp_path / "nominal.mcap", offset_m3s=1e-5), write_twin(tmp_path / "cal.mcap", offset_m3s=0.0)]
-    res = build_report(b, logs, tmp_path / "r.html", labels=list(LABELS))
+    res = build_report(b, logs, tmp_path / "r.html", labels=labels(build_parser().parse_args([])))
     lines = plateau_lines(res)
     assert lines[0].startswith("  plateau: speed, pressure | flow [L/min] measured, nominal, calibrated from bench_map")
     assert len(lines) == 3
@@ -26,11 +26,14 @@ def test_plateau_lines_show_both_twins_and_their_verdicts(tmp_path):
     assert res["headline"][0] == "2 plateaus — nominal: 0 pass, 2 fail; calibrated from bench_map: 2 pass, 0 fail"
 
 
-def test_calibration_note_names_the_shipped_fit():
-    """Behaviour: the demo says where its calibrated pump file comes from (tool, bag, fitted factor), read from
-    the file's own calibration block; a file without one is named as such."""
-    note = calibration_note(FITTED)
-    assert FITTED == ROOT / "bags" / "pump_fitted_bench_map.yaml"
-    assert "fitted by `gerotor-twin calibrate` on bags/bench_map.mcap" in note and "12 plateaus" in note
-    assert " x 1.09" in note                      # the common clearance factor, truth 1.1 (bags/README.md)
+def test_calibration_note_and_labels():
+    """Behaviour: the demo says what a calibrated pump file's own calibration block says (recording, plateaus,
+    fitted factor with its interval, efficiency RMSE before and after), shown on the shipped fit of the map
+    recording; a file without such a block is named as such; the labels name the calibration's source."""
+    note = calibration_note(ROOT / "bags" / "pump_fitted_bench_map.yaml")
+    assert note.startswith("bags/bench_map.mcap, 12 plateaus: ") and " x 1.09" in note and "95 % CI" in note
+    assert "eta_v RMSE 6.92 -> 0.04 %-pt" in note
     assert calibration_note(ROOT / "config" / "pump.yaml").endswith("pump.yaml: no calibration block")
+    assert labels(build_parser().parse_args([])) == ["nominal", "calibrated from bench_map"]
+    assert labels(build_parser().parse_args(["--calibrated", "bags/pump_fitted_bench_map.yaml"]))[1] == \
+        "calibrated from pump_fitted_bench_map"

@@ -1,32 +1,33 @@
-"""``make demo``: the nominal twin live beside a replayed bench, the calibrated twin beside it, one report.
+"""``make demo``: the nominal twin live beside a replayed bench, the twin calibrated on the map recording beside it.
 
-Steps (the node and the replay are separate processes, real DDS on loopback, private ``ROS_DOMAIN_ID``):
+Steps (separate processes; the node and the replay talk real DDS on loopback, private ``ROS_DOMAIN_ID``):
 
-1. start ``twin_node`` (``python -m gerotor_twin.ros.node``) with
+1. in the background, at low priority, while steps 2-4 run: ``gerotor-twin calibrate``
+   on ``bags/bench_map.mcap`` (-> ``out/demo/pump_fitted.yaml``; ``--calibrated F``
+   uses a pump file instead), then ``gerotor-twin run-bag --config`` that pump file
+   over ``bags/bench_transient.mcap`` (offline, the node's core: the same predictions
+   the node would make);
+2. start ``twin_node`` (``python -m gerotor_twin.ros.node``) with
    ``config/twin.yaml`` (the packaged nominal pump), ``use_sim_time:=true`` and
    ``log_dir`` under the output directory, and wait for its "ready" line;
-2. ``gerotor-twin replay bags/bench_transient.mcap`` in real time (rate 1,
+3. ``gerotor-twin replay bags/bench_transient.mcap`` in real time (rate 1,
    ``/clock`` at 50 Hz) into it;
-3. stop the node with SIGINT (it finalises its MCAP log);
-4. the twin with the pump calibrated on the map recording
-   (``bags/pump_fitted_bench_map.yaml``) over the same recording, offline
-   (:func:`gerotor_twin.offline.run_bag.run_bag`, what ``gerotor-twin run-bag
-   --config`` does: the same core, the same predictions as the node);
+4. stop the node with SIGINT (it finalises its MCAP log);
 5. ``gerotor-twin report`` on the bench recording and both twin logs;
 6. print where the report and the logs are, both twins' predictions per
    plateau and both verdict sets side by side.
 
 The live node runs the nominal pump, what a node started without a pump file runs; the
 calibrated twin, the one the demo's story ends on, runs offline, so its verdicts do not
-depend on how busy the machine is. Both undo the emulated bench thermometer's 3 s lag
-(``oil_sensor_tau_s``), as the calibration did, so the pump file is their only difference.
+depend on how busy the machine is, and in the replay's real-time window, so it adds no
+wall time. Both undo the emulated bench thermometer's 3 s lag (``oil_sensor_tau_s``), as
+the calibration does, so the pump file is their only difference.
 
 This module starts processes only; it does not import rclpy itself.
 """
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import signal
 import subprocess
@@ -41,7 +42,7 @@ from gerotor_twin.units import m3s_to_lpm
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 
-__all__ = ["main", "plateau_lines", "calibration_note"]
+__all__ = ["main", "build_parser", "plateau_lines", "calibration_note", "labels"]
 
 
 def _pump(stream, sink: list, ready: threading.Event, echo: bool) -> None:
@@ -69,20 +70,22 @@ def _compile_kernels(model: str) -> float:
     return time.monotonic() - t0
 
 
-FITTED = ROOT / "bags" / "pump_fitted_bench_map.yaml"
+MAP = ROOT / "bags" / "bench_map.mcap"
 #: The emulated bench thermometer's lag [s] (bags/README.md), undone by the calibration and by both twins here.
 OIL_SENSOR_TAU_S = 3.0
-LABELS = ("nominal", "calibrated from bench_map")
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m gerotor_twin.ros.demo_live", description=__doc__.splitlines()[0])
     ap.add_argument("--bag", default=str(ROOT / "bags" / "bench_transient.mcap"))
     ap.add_argument("--out", default=str(ROOT / "out" / "demo"))
     ap.add_argument("--model", default="mobility")
     ap.add_argument("--rate", type=float, default=1.0)
-    ap.add_argument("--calibrated", default=str(FITTED), metavar="PUMP.yaml",
-                    help="pump file of the calibrated twin (default: the one fitted on bags/bench_map.mcap)")
+    ap.add_argument("--map", default=str(MAP), metavar="BAG",
+                    help="recording the calibration fits the clearances on (default bags/bench_map.mcap)")
+    ap.add_argument("--calibrated", metavar="PUMP.yaml",
+                    help="use this pump file for the calibrated twin instead of calibrating on --map (e.g. "
+                         "bags/pump_fitted_bench_map.yaml, the shipped fit of bags/bench_map.mcap)")
     ap.add_argument("--oil-sensor-tau", type=float, default=OIL_SENSOR_TAU_S, metavar="S",
                     help=f"oil thermometer lag undone by both twins [s] (default {OIL_SENSOR_TAU_S:g})")
     ap.add_argument("--domain-id", type=int, default=None,
@@ -141,33 +144,81 @@ def _live_twin(args, log_dir: Path) -> Path | None:
 
 
 def calibration_note(pump_yaml) -> str:
-    """Where a pump file's values come from, in one line: its ``calibration`` block (tool, bags, date, fitted
-    factor), or that it has none."""
+    """What a pump file's ``calibration`` block says, in one line: bags, plateaus, the fitted clearance
+    factor(s) and the volumetric-efficiency RMSE before and after the fit; or that it has no such block."""
     cal = (yaml.safe_load(Path(pump_yaml).read_text()) or {}).get("calibration")
     if not isinstance(cal, dict):
         return f"{pump_yaml}: no calibration block"
-    factors = ", ".join(f"{c['combination']} x {c['factor']:.4f}" for c in cal.get("fitted_combinations", []))
-    return (f"{pump_yaml}: fitted by `{cal.get('tool', '?')}` on {', '.join(cal.get('bags', []))} "
-            f"({cal.get('date', '?')[:10]}, {cal.get('plateaus', '?')} plateaus" + (f"; {factors}" if factors else "")
-            + ")")
+    parts = [f"{c['combination']} x {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}-{c['factor_ci95'][1]:.4f})"
+             for c in cal.get("fitted_combinations", [])]
+    res = cal.get("residuals", {})
+    if "eta_rmse" in res and "eta_rmse_prior" in res:
+        parts.append(f"eta_v RMSE {100 * res['eta_rmse_prior']:.2f} -> {100 * res['eta_rmse']:.2f} %-pt")
+    return (f"{', '.join(cal.get('bags', []))}, {cal.get('plateaus', '?')} plateaus"
+            + (": " + "; ".join(parts) if parts else ""))
 
 
-def _calibrated_twin(args, out: Path) -> Path:
-    """The calibrated pump over the same recording, offline (``run-bag --config``); its MCAP log."""
-    from gerotor_twin.offline.run_bag import run_bag
-    from gerotor_twin.twin.settings import TwinSettings, oil_sensor_tau_arg
-    log = out / "calibrated_twin.mcap"
-    print(f"demo: calibrated twin: run-bag --config {args.calibrated} over the same recording (offline, no ROS)",
-          flush=True)
-    print(f"demo:   {calibration_note(args.calibrated)}", flush=True)
-    print("demo:   regenerate it: gerotor-twin calibrate --bench bags/bench_map.mcap "
-          "-o bags/pump_fitted_bench_map.yaml --oil-sensor-tau 3 --overwrite   (minutes; make demo-calibrate)",
-          flush=True)
-    settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
-    res = run_bag(args.bag, log, model=args.model, config_path=args.calibrated, settings=settings,
-                  overwrite=True, progress=None)
-    print(f"demo:   {res['simulated_s']:.1f} s simulated in {res['wall_s']:.1f} s", flush=True)
-    return log
+class Background(threading.Thread):
+    """Commands run one after the other in a thread, each a process at low priority (``nice 10``), while the
+    replay runs; stops at the first that fails (``failed``: its name) or at :meth:`cancel`."""
+
+    def __init__(self, steps: list[tuple[str, list[str], Path]]):
+        super().__init__(daemon=True)
+        self.steps = steps                  #: (name, argv, log file)
+        self.failed: str | None = None
+        self._proc: subprocess.Popen | None = None
+        self._cancelled = threading.Event()
+
+    def run(self) -> None:
+        for name, argv, log in self.steps:
+            if self._cancelled.is_set():
+                self.failed = name
+                return
+            with open(log, "w") as f:
+                self._proc = subprocess.Popen(argv, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT,
+                                              preexec_fn=lambda: os.nice(10))
+            if self._proc.wait() != 0:
+                self.failed = name
+                return
+
+    def cancel(self) -> None:
+        self._cancelled.set()
+        if self._proc is not None and self._proc.poll() is None:
+            self._proc.terminate()
+        self.join()
+
+
+def _calibrated_steps(args, out: Path) -> tuple[list[tuple[str, list[str], Path]], Path, Path]:
+    """The calibrated twin's commands: ``calibrate`` on the map recording (unless ``--calibrated`` names a pump
+    file), then ``run-bag --config`` over the demo's recording; and the pump file and twin log they write."""
+    config = Path(args.calibrated) if args.calibrated else out / "pump_fitted.yaml"
+    twin_log = out / "calibrated_twin.mcap"
+    tau = str(args.oil_sensor_tau)
+    steps = [] if args.calibrated else [
+        ("calibrate", ["calibrate", "--bench", args.map, "-o", str(config), "--oil-sensor-tau", tau, "--overwrite"])]
+    steps.append(("run-bag", ["run-bag", args.bag, "-o", str(twin_log), "--config", str(config), "--model",
+                              args.model, "--oil-sensor-tau", tau, "--overwrite", "--quiet"]))
+    for name, cmd in steps:
+        print(f"demo: calibrated twin: gerotor-twin {' '.join(cmd)}   (in the background)", flush=True)
+    return ([(name, [sys.executable, "-m", "gerotor_twin", *cmd], out / f"{name}.log") for name, cmd in steps],
+            config, twin_log)
+
+
+def _calibrated_result(bg: Background, config: Path, out: Path) -> bool:
+    """Wait for the background commands; print what the calibration found and the run-bag line (or the failure)."""
+    bg.join()
+    if bg.failed:
+        text = (out / f"{bg.failed}.log").read_text().strip().splitlines()
+        print(f"demo: {bg.failed} failed:\n" + "\n".join(text[-10:]), file=sys.stderr)
+        return False
+    print(f"demo: calibrated twin: {config}: {calibration_note(config)}")
+    print(f"demo: calibrated twin: {(out / 'run-bag.log').read_text().strip().splitlines()[-1]}", flush=True)
+    return True
+
+
+def labels(args) -> list[str]:
+    """Report labels of the two twins: ``nominal`` and ``calibrated from <recording or pump file>``."""
+    return ["nominal", f"calibrated from {Path(args.calibrated or args.map).stem}"]
 
 
 def _fmt(v, scale: float, fmt: str) -> str:
@@ -191,8 +242,18 @@ def plateau_lines(res: dict) -> list[str]:
     return out
 
 
+def _report(args, logs: list[Path], out: Path) -> dict | None:
+    from gerotor_twin.io import McapReadError
+    from gerotor_twin.report.build import build_report
+    try:
+        return build_report(args.bag, logs, out / "report.html", out / "metrics.json", labels=labels(args))
+    except McapReadError as exc:
+        print(f"demo: report failed: {exc}", file=sys.stderr)
+        return None
+
+
 def main(argv=None) -> int:
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     if args.domain_id is None:
         from gerotor_twin.ros.domain import claim_domain
         env_id = os.environ.get("GEROTOR_TWIN_DEMO_DOMAIN")
@@ -203,22 +264,26 @@ def main(argv=None) -> int:
     print("demo: model kernels (compiled once after an install, about 1-2 min; cached after) ...", flush=True)
     print(f"demo: model kernels ready in {_compile_kernels(args.model):.1f} s", flush=True)
     t0 = time.monotonic()
-    twin_log = _live_twin(args, log_dir)
-    if twin_log is None:
-        return 1
-    from gerotor_twin.io import McapReadError
-    from gerotor_twin.report.build import build_report
-    html, js = out / "report.html", out / "metrics.json"
+    steps, config, cal_log = _calibrated_steps(args, out)
+    bg = Background(steps)
+    bg.start()
     try:
-        cal_log = _calibrated_twin(args, out)
-        res = build_report(args.bag, [twin_log, cal_log], html, js, labels=list(LABELS))
-    except McapReadError as exc:
-        print(f"demo: report failed: {exc}", file=sys.stderr)
+        twin_log = _live_twin(args, log_dir)
+    except BaseException:           # Ctrl-C included: no calibration left running
+        bg.cancel()
+        raise
+    if twin_log is None:
+        bg.cancel()
+        return 1
+    if not _calibrated_result(bg, config, out):
+        return 1
+    res = _report(args, [twin_log, cal_log], out)
+    if res is None:
         return 1
     print(f"demo: node log     {twin_log} ({twin_log.stat().st_size / 1e6:.2f} MB)")
     print(f"demo: run-bag log  {cal_log} ({cal_log.stat().st_size / 1e6:.2f} MB)")
-    print(f"demo: report       {html}")
-    print(f"demo: metrics      {js}")
+    print(f"demo: report       {out / 'report.html'}")
+    print(f"demo: metrics      {out / 'metrics.json'}")
     for line in plateau_lines(res) + [f"demo: {h}" for h in res["headline"]]:
         print(line)
     print(f"demo: done in {time.monotonic() - t0:.0f} s", flush=True)
