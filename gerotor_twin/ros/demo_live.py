@@ -109,7 +109,7 @@ def _live_twin(args, log_dir: Path) -> Path | None:
     before = set(log_dir.glob("*.mcap"))
     env = dict(os.environ, ROS_DOMAIN_ID=str(args.domain_id))
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
-    print(f"demo: nominal twin: node ({args.model}, config/pump.yaml, use_sim_time) + replay of {args.bag} "
+    print(f"demo: nominal twin: node ({args.model}, config/pump.yaml, use_sim_time) + replay of {_shown(args.bag)} "
           f"in real time (ROS_DOMAIN_ID={args.domain_id})", flush=True)
     node = subprocess.Popen(
         [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", "--params-file", str(ROOT / "config" / "twin.yaml"),
@@ -158,6 +158,12 @@ def calibration_note(pump_yaml) -> str:
             + (": " + "; ".join(parts) if parts else ""))
 
 
+def _shown(path) -> str:
+    """``path`` relative to the package root when inside it (the background commands run there), else absolute."""
+    p = Path(path).resolve()
+    return str(p.relative_to(ROOT)) if p.is_relative_to(ROOT) else str(p)
+
+
 class Background(threading.Thread):
     """Commands run one after the other in a thread, each a process at low priority (``nice 10``), while the
     replay runs; stops at the first that fails (``failed``: its name) or at :meth:`cancel`."""
@@ -193,10 +199,10 @@ def _calibrated_steps(args, out: Path) -> tuple[list[tuple[str, list[str], Path]
     file), then ``run-bag --config`` over the demo's recording; and the pump file and twin log they write."""
     config = Path(args.calibrated) if args.calibrated else out / "pump_fitted.yaml"
     twin_log = out / "calibrated_twin.mcap"
-    tau = str(args.oil_sensor_tau)
-    steps = [] if args.calibrated else [
-        ("calibrate", ["calibrate", "--bench", args.map, "-o", str(config), "--oil-sensor-tau", tau, "--overwrite"])]
-    steps.append(("run-bag", ["run-bag", args.bag, "-o", str(twin_log), "--config", str(config), "--model",
+    tau, bag, config_arg = str(args.oil_sensor_tau), _shown(args.bag), _shown(config)
+    steps = [] if args.calibrated else [("calibrate", ["calibrate", "--bench", _shown(args.map), "-o", config_arg,
+                                                       "--oil-sensor-tau", tau, "--overwrite"])]
+    steps.append(("run-bag", ["run-bag", bag, "-o", _shown(twin_log), "--config", config_arg, "--model",
                               args.model, "--oil-sensor-tau", tau, "--overwrite", "--quiet"]))
     for name, cmd in steps:
         print(f"demo: calibrated twin: gerotor-twin {' '.join(cmd)}   (in the background)", flush=True)
