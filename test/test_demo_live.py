@@ -1,7 +1,15 @@
 """``make demo`` (gerotor_twin.ros.demo_live): what it prints about the nominal and the calibrated twin."""
+import os
+import re
+import subprocess
+import sys
 from pathlib import Path
 
+import pytest
+import yaml
+
 from gerotor_twin.report.build import build_report
+from gerotor_twin.ros.domain import claim_domain
 from gerotor_twin.ros.demo_live import build_parser, calibration_note, labels, plateau_lines
 from report_helpers import write_bench, write_twin
 
@@ -37,3 +45,26 @@ def test_calibration_note_and_labels():
     assert labels(build_parser().parse_args([])) == ["nominal", "calibrated from bench_map"]
     assert labels(build_parser().parse_args(["--calibrated", "bags/pump_fitted_bench_map.yaml"]))[1] == \
         "calibrated from pump_fitted_bench_map"
+
+
+@pytest.mark.slow
+def test_make_demo_end_to_end(tmp_path):
+    """Behaviour (real processes: node, replay over DDS, calibrate, run-bag; ≈ 1 min): ``make demo``'s job
+    calibrates on the map recording (the emulated pump's clearance factor, 1.1, inside the fit's interval),
+    prints both twins' verdicts side by side, the calibrated twin passing every plateau and the nominal one
+    failing some, and writes one report with both twins."""
+    env = dict(os.environ, GEROTOR_TWIN_DEMO_DOMAIN=str(claim_domain()))
+    run = subprocess.run([sys.executable, "-m", "gerotor_twin.ros.demo_live", "--out", str(tmp_path)], cwd=ROOT,
+                         env=env, capture_output=True, text=True, timeout=400)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    head = [ln for ln in lines if ln.startswith("demo: 4 plateaus — ")]
+    assert len(head) == 1, run.stdout[-2000:]
+    assert re.fullmatch(r"demo: 4 plateaus — nominal: \d pass, [1-4] fail(, \d no data)?; "
+                        r"calibrated from bench_map: 4 pass, 0 fail", head[0]), head[0]
+    lo, hi = (float(x) for x in re.search(r"95 % CI (\d\.\d+)-(\d\.\d+)", run.stdout).groups())
+    assert lo <= 1.1 <= hi
+    fit = yaml.safe_load((tmp_path / "pump_fitted.yaml").read_text())
+    assert fit["calibration"]["bags"] == ["bags/bench_map.mcap"]
+    page = (tmp_path / "report.html").read_text()
+    assert "id='tab-compare'" in page and "verdict calibrated from bench_map" in page
