@@ -3,6 +3,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -10,7 +11,7 @@ import yaml
 
 from gerotor_twin.report.build import build_report
 from gerotor_twin.ros.domain import claim_domain
-from gerotor_twin.ros.demo_live import build_parser, calibration_note, labels, plateau_lines
+from gerotor_twin.ros.demo_live import Background, build_parser, calibration_note, labels, plateau_lines
 from report_helpers import write_bench, write_twin
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,6 +46,25 @@ def test_calibration_note_and_labels():
     assert labels(build_parser().parse_args([])) == ["nominal", "calibrated from bench_map"]
     assert labels(build_parser().parse_args(["--calibrated", "bags/pump_fitted_bench_map.yaml"]))[1] == \
         "calibrated from pump_fitted_bench_map"
+
+
+def test_background_steps_stop_at_a_failure_and_on_cancel(tmp_path):
+    """Behaviour: the background commands run in order at low priority; the first failure stops the chain and
+    is named; cancel ends a running command at once (no calibration left running after a failed node)."""
+    py = sys.executable
+    bg = Background([("ok", [py, "-c", "import os; print(os.nice(0))"], tmp_path / "ok.log"),
+                     ("bad", [py, "-c", "raise SystemExit(3)"], tmp_path / "bad.log"),
+                     ("never", [py, "-c", "pass"], tmp_path / "never.log")])
+    bg.start()
+    bg.join(60)
+    assert bg.failed == "bad" and not (tmp_path / "never.log").exists()
+    assert int((tmp_path / "ok.log").read_text()) >= 10
+    slow = Background([("sleep", [py, "-c", "import time; time.sleep(60)"], tmp_path / "sleep.log")])
+    slow.start()
+    time.sleep(1.0)
+    t0 = time.monotonic()
+    slow.cancel()
+    assert time.monotonic() - t0 < 10 and slow.failed == "sleep" and not slow.is_alive()
 
 
 @pytest.mark.slow

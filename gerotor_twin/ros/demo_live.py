@@ -164,6 +164,15 @@ def _shown(path) -> str:
     return str(p.relative_to(ROOT)) if p.is_relative_to(ROOT) else str(p)
 
 
+def _lower_priority(pid: int, niceness: int = 10) -> None:
+    """Nice a started process to ``niceness`` (or leave it at this process's, if higher). Set after the start:
+    ``preexec_fn`` is unsafe in a process with threads."""
+    try:
+        os.setpriority(os.PRIO_PROCESS, pid, max(niceness, os.getpriority(os.PRIO_PROCESS, 0)))
+    except ProcessLookupError:          # already finished
+        pass
+
+
 class Background(threading.Thread):
     """Commands run one after the other in a thread, each a process at low priority (``nice 10``), while the
     replay runs; stops at the first that fails (``failed``: its name) or at :meth:`cancel`."""
@@ -181,8 +190,10 @@ class Background(threading.Thread):
                 self.failed = name
                 return
             with open(log, "w") as f:
-                self._proc = subprocess.Popen(argv, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT,
-                                              preexec_fn=lambda: os.nice(10))
+                self._proc = subprocess.Popen(argv, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT)
+            _lower_priority(self._proc.pid)
+            if self._cancelled.is_set():
+                self._proc.terminate()
             if self._proc.wait() != 0:
                 self.failed = name
                 return
