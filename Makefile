@@ -28,11 +28,12 @@ $(STAMP): requirements.txt setup.py
 precompile: $(STAMP)
 	$(PY) -m gerotor_twin.precompile
 
-# the twin node fed by a replayed bench recording (real time), then the HTML report (< 1 min)
+# the nominal twin node fed by a replayed bench recording (real time) and the twin calibrated on the map
+# recording (calibrate + run-bag, in the background meanwhile), then one HTML report of both (< 1 min)
 demo: $(STAMP)
 	$(PY) -m gerotor_twin.ros.demo_live --out out/demo
 
-# the model alone: efficiency table and plots (the former `make demo`)
+# the model alone: efficiency table and plots
 demo-model: $(STAMP)
 	$(VENV)/bin/gerotor-twin demo --out out/demo-model
 

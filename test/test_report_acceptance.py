@@ -1,9 +1,13 @@
-"""Acceptance criterion of the report: per-plateau verdicts, options, file, errors, ``--check``."""
+"""Acceptance criterion of the report: per-plateau verdicts, options, file, errors, ``--check``, two twins side by
+side."""
+import csv
+
 import pytest
 
 from gerotor_twin.cli import build_parser, main
 from gerotor_twin.errors import InputError
 from gerotor_twin.report.acceptance import AcceptanceCriterion, criterion_from_args, verdict
+from gerotor_twin.report.build import build_report
 from report_helpers import write_bench, write_twin
 
 LPM = 6e4
@@ -89,3 +93,32 @@ def test_cli_verdicts_and_check_exit_status(tmp_path, capsys):
     assert main(base + ["--tol-eta-pts", "x"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "--tol-eta-pts" in err and len(err.strip().splitlines()) == 1
+
+
+def test_two_twins_verdicts_side_by_side(tmp_path):
+    """Behaviour: a report of a nominal twin (0.6 L/min high) and a calibrated one (exact) over the same bench
+    recording leads its headline with both verdict sets in one line, and shows them side by side in one table
+    (page and CSV); a single twin keeps its one headline line and gets no such table."""
+    b = write_bench(tmp_path / "b.mcap")
+    nominal = write_twin(tmp_path / "nominal.mcap", offset_m3s=1e-5)
+    calibrated = write_twin(tmp_path / "calibrated.mcap", offset_m3s=0.0)
+    res = build_report(b, [nominal, calibrated], tmp_path / "r.html", labels=["nominal", "calibrated"],
+                       csv_dir=tmp_path / "csv")
+    assert res["headline"][0] == "2 plateaus — nominal: 0 pass, 2 fail; calibrated: 2 pass, 0 fail"
+    assert res["headline"][1].startswith("nominal: 2 plateaus: 0 pass, 2 fail;")
+    assert res["headline"][2].startswith("calibrated: 2 plateaus: 2 pass, 0 fail;")
+    page = (tmp_path / "r.html").read_text()
+    assert "2 plateaus — nominal: 0 pass, 2 fail; calibrated: 2 pass, 0 fail" in page
+    table = page[page.index("id='tab-compare'"):]
+    table = table[:table.index("</table>")]
+    assert "verdict nominal" in table and "verdict calibrated" in table
+    assert table.count("verdict-fail'>FAIL (") == 2 and table.count("verdict-pass'>PASS<") == 2
+    with open(tmp_path / "csv" / "r_verdicts_side_by_side.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["verdict nominal"], r["verdict calibrated"]) for r in rows] == [("FAIL (flow, η)", "PASS"),
+                                                                              ("FAIL (η)", "PASS")]
+    assert [float(r["flow nominal [L/min]"]) - float(r["flow calibrated [L/min]"]) for r in rows] == \
+        pytest.approx([0.6, 0.6], abs=0.02)
+    one = build_report(b, [nominal], tmp_path / "one.html", labels=["nominal"])
+    assert one["headline"][0].startswith("nominal: 2 plateaus: 0 pass, 2 fail;")
+    assert "tab-compare" not in (tmp_path / "one.html").read_text()

@@ -45,7 +45,7 @@ def test_html_is_self_contained_with_every_figure(report):
         assert f'<div class="ts-panel" id="{tid}"></div>' in page, tid
     assert not re.search(r'(src|href)="(https?:)?//', page) and "<link" not in page
     assert "<script src" not in page and "@import" not in page
-    assert page.count("<table class='metrics'") == 3        # summary + one plateau table per twin
+    assert page.count("<table class='metrics'") == 4        # summary, verdicts side by side, one plateau table per twin
 
 
 def test_json_metrics(report):
@@ -200,7 +200,7 @@ def test_headless_chromium_renders_every_plot(report):
     zmin, zmax, want_min, want_max = res["zoomSync"]
     assert zmin == pytest.approx(want_min) and zmax == pytest.approx(want_max)
     assert {a["name"] for a in res["links"]} == {"report_aligned.csv", "report_summary.csv", "report_plateaus_a.csv",
-                                                 "report_plateaus_b.csv"}
+                                                 "report_plateaus_b.csv", "report_verdicts_side_by_side.csv"}
     assert all(a["href"].startswith("data:text/csv") for a in res["links"])
     assert res["resources"] == []
 

@@ -24,7 +24,8 @@ from pathlib import Path
 
 from gerotor_twin.errors import InputError
 
-__all__ = ["AcceptanceCriterion", "verdict", "criterion_from_args", "add_arguments", "PASS", "FAIL", "NO_DATA"]
+__all__ = ["AcceptanceCriterion", "verdict", "tally", "tally_text", "criterion_from_args", "add_arguments", "PASS",
+           "FAIL", "NO_DATA"]
 
 LPM = 6e4
 PASS, FAIL, NO_DATA = "pass", "fail", "no data"
@@ -109,6 +110,17 @@ def verdict(row: dict, crit: AcceptanceCriterion) -> dict:
         out["failed"].append("η")
     out["verdict"] = FAIL if out["reasons"] else PASS
     return out
+
+
+def tally(verdicts) -> dict[str, int]:
+    """Number of plateaus per verdict (``pass``, ``fail``, ``no data``) in one twin's :func:`verdict` results."""
+    return {k: sum(v["verdict"] == k for v in verdicts) for k in (PASS, FAIL, NO_DATA)}
+
+
+def tally_text(verdicts) -> str:
+    """The tally in words: ``"1 pass, 3 fail"``, with ``", k no data"`` only when there are such plateaus."""
+    n = tally(verdicts)
+    return f"{n[PASS]} pass, {n[FAIL]} fail" + (f", {n[NO_DATA]} no data" if n[NO_DATA] else "")
 
 
 _KEYS = {"flow_abs_lpm": "--tol-flow-lpm", "flow_rel": "--tol-flow-rel", "eta_pts": "--tol-eta-pts",

@@ -9,7 +9,7 @@ import numpy as np
 from gerotor_twin.errors import InputError, one_line
 
 from . import layout
-from .acceptance import FAIL, NO_DATA, PASS, AcceptanceCriterion, add_arguments, criterion_from_args, verdict
+from .acceptance import PASS, AcceptanceCriterion, add_arguments, criterion_from_args, tally_text, verdict
 from .analysis import add_temperatures, compare, find_plateaus, make_grid, plateau_temperatures
 from .context import ReportContext
 from .data import load_bench, load_twin, overlap, pump_config
@@ -93,12 +93,14 @@ def _notes(ctx: ReportContext) -> list[str]:
 
 
 def _headline(ctx: ReportContext) -> list[str]:
+    """Per twin: verdict counts and pooled errors; with two or more twins first their verdicts side by side."""
     out = []
+    if len(ctx.comps) > 1:
+        out.append(f"{len(ctx.plateaus)} plateaus — "
+                   + "; ".join(f"{c['label']}: {tally_text(vs)}" for c, vs in zip(ctx.comps, ctx.verdicts)))
     for c, vs in zip(ctx.comps, ctx.verdicts):
         fe, ee = c["overall"]["flow_error_m3s"], c["overall"]["eta_error"]
-        n = {k: sum(v["verdict"] == k for v in vs) for k in (PASS, FAIL, NO_DATA)}
-        count = (f"{len(vs)} plateaus: {n[PASS]} pass, {n[FAIL]} fail"
-                 + (f", {n[NO_DATA]} no data" if n[NO_DATA] else ""))
+        count = f"{len(vs)} plateaus: {tally_text(vs)}"
         if fe["n"]:
             out.append(f"{c['label']}: {count}; mean-flow error bias {fe['bias'] * LPM:+.3f} L/min, RMSE "
                        f"{fe['rmse'] * LPM:.3f} L/min, max {fe['max_abs'] * LPM:.3f} L/min; volumetric efficiency "

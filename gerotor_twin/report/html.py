@@ -64,7 +64,7 @@ def table_html(t: Table) -> str:
             text = cell(c, row[k]) or "–"
             word = text.split(" ")[0]
             extra = (" verdict" + (f" verdict-{word.lower()}" if word in ("PASS", "FAIL") else "")
-                     if c.name == "verdict" else "")
+                     if c.name.startswith("verdict") else "")
             cells.append(f"<td class='{'l' if c.align_left else ''}{extra}'>{_e(text)}</td>")
         body.append(f"<tr{cls}>{''.join(cells)}</tr>")
     title = f"<h3>{_e(t.title)}</h3>" if t.title else ""

@@ -71,6 +71,7 @@ PAGE = [
     H.ts_health_efficiency,
     H.ts_health_leakage,
     T.summary_table,
+    T.comparison_table,
     T.plateau_tables,
     img_plateau_errors,
     img_efficiency_map,

@@ -14,11 +14,11 @@ import urllib.parse
 
 import numpy as np
 
-from .acceptance import FAIL, NO_DATA, PASS
+from .acceptance import FAIL, NO_DATA, PASS, tally
 from .context import ReportContext
 from .panels import Column, Table, TimeSeries
 
-__all__ = ["plateau_tables", "summary_table", "table_csv", "aligned_csv", "csv_data_uri", "slug"]
+__all__ = ["plateau_tables", "summary_table", "comparison_table", "table_csv", "aligned_csv", "csv_data_uri", "slug"]
 
 LPM = 6e4
 HEADING = "Per-plateau metrics and acceptance verdict"
@@ -50,10 +50,14 @@ PLATEAU_COLUMNS = (
 )
 
 
+def _verdict_text(v: dict) -> str:
+    return v["verdict"].upper() + (f" ({', '.join(v['failed'])})" if v["failed"] else "")
+
+
 def _plateau_row(r: dict, v: dict) -> tuple:
     d = None if r["eta_predicted"] is None or r["eta_measured"] is None else r["eta_predicted"] - r["eta_measured"]
     fe = r["flow_error_m3s"]
-    return (r["plateau"], v["verdict"].upper() + (f" ({', '.join(v['failed'])})" if v["failed"] else ""),
+    return (r["plateau"], _verdict_text(v),
             f"{r['t0_s']:.1f}–{r['t1_s']:.1f}", r["t0_s"], r["t1_s"], r["rpm"], r["bar"], r.get("oil_temperature_c"),
             _lpm(r["flow_measured_m3s"]),
             _lpm(r["flow_predicted_m3s"]), _lpm(fe["bias"]), _lpm(fe["rmse"]), _lpm(fe["max_abs"]),
@@ -82,12 +86,34 @@ def summary_table(ctx: ReportContext) -> Table:
     rows = []
     for c, vs in zip(ctx.comps, ctx.verdicts):
         fe, ee, w = c["overall"]["flow_error_m3s"], c["overall"]["eta_error"], c["whole_run"]["flow_error_m3s"]
-        n = {k: sum(v["verdict"] == k for v in vs) for k in (PASS, FAIL, NO_DATA)}
+        n = tally(vs)
         rows.append((c["label"], len(vs), n[PASS], n[FAIL], n[NO_DATA], _lpm(fe["bias"]), _lpm(fe["rmse"]),
                      _lpm(fe["max_abs"]), _pct(ee["bias"]), _pct(ee["rmse"]), _lpm(w["rmse"])))
     return Table("tab-summary", HEADING, cols, tuple(rows), f"{ctx.stem}_summary.csv",
                  "Error statistics pool every 0.1 s bin of every plateau; 'whole run' also the transitions.",
                  "All plateaus")
+
+
+def comparison_table(ctx: ReportContext) -> Table | None:
+    """With two or more twin files: per plateau the measurement and each twin's prediction and verdict, side by
+    side (``None`` for one twin: its plateau table says it all)."""
+    if len(ctx.comps) < 2:
+        return None
+    cols = [Column("plateau", "{:d}"), Column("speed [rpm]", "{:.0f}"), Column("delivery p [bar g]", "{:.2f}"),
+            Column("flow measured [L/min]", "{:.2f}"), Column("eta_v measured [%]", "{:.2f}")]
+    for c in ctx.comps:
+        cols += [Column(f"flow {c['label']} [L/min]", "{:.2f}"), Column(f"eta_v {c['label']} [%]", "{:.2f}"),
+                 Column(f"verdict {c['label']}", "{}", True)]
+    rows = []
+    for k, r in enumerate(ctx.comps[0]["plateaus"]):
+        row = [r["plateau"], r["rpm"], r["bar"], _lpm(r["flow_measured_m3s"]), _pct(r["eta_measured"])]
+        for c, vs in zip(ctx.comps, ctx.verdicts):
+            row += [_lpm(c["plateaus"][k]["flow_predicted_m3s"]), _pct(c["plateaus"][k]["eta_predicted"]),
+                    _verdict_text(vs[k])]
+        rows.append(tuple(row))
+    return Table("tab-compare", HEADING, tuple(cols), tuple(rows), f"{ctx.stem}_verdicts_side_by_side.csv",
+                 f"Plateau means, measured and predicted by each twin file, with each twin's verdict. Acceptance "
+                 f"criterion: {ctx.criterion.describe()}.", "Verdicts side by side")
 
 
 def cell(col: Column, v) -> str:
