@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
 from ..hydraulics.state_equation import convert_log_density, log_density_of
-from ..precompile import announce_compilation
+from ..compile_events import announce_compilation
 from . import kernel as K
 from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
