@@ -176,6 +176,9 @@ class Numerics:
     the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
     ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
     over the next step (kept for comparison, docs/numerics.md).
+    ``max_substep_attempts``: the sub-step attempts (accepted and rejected) one output step may take; past
+    it the step is abandoned and reported (``model.pump.SolverFailure``): the bound on one call's work the
+    node relies on (default 2000, ≈ 10 ms; the pump family takes 2–10; the tight references take 1e6).
     ``gerotor-twin bench accuracy`` measures the defaults against a tight reference.
     """
     table_points: int = 2048
@@ -188,8 +191,12 @@ class Numerics:
     closing_tolerance: float = 0.25
     top_tolerance: float = 1.0
     gear_coupling: str = "stages"
+    max_substep_attempts: int = 2000
 
     def __post_init__(self):
+        if int(self.max_substep_attempts) != self.max_substep_attempts or \
+                not 10 <= self.max_substep_attempts <= 10_000_000:
+            raise InputError("numerics.max_substep_attempts", self.max_substep_attempts, "integer in [10, 1e7]")
         if int(self.table_points) != self.table_points or not 256 <= self.table_points <= 65536:
             raise InputError("numerics.table_points", self.table_points, "integer in [256, 65536]")
         check_range("numerics.max_step_deg", self.max_step_deg, 0.0, 5.0, lo_open=True, unit="deg")
@@ -372,7 +379,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     rng = OperatingRange(**{k: _num(rs, "range", k) for k in rs})
     ns = _section(raw, "numerics", {f.name for f in fields(Numerics)}, False)
     num = Numerics(**{k: (str(ns[k]) if k in ("error_measure", "gear_coupling") else
-                          int(_num(ns, "numerics", k)) if k == "table_points" else
+                          int(_num(ns, "numerics", k)) if k in ("table_points", "max_substep_attempts") else
                           _num(ns, "numerics", k)) for k in ns})
     return PumpConfig(gears=gears, clearances=clear, suction_port=ports["suction"],
                       delivery_port=ports["delivery"], fluid=fluid, orifice=orifice, tip_dh=tip_dh,

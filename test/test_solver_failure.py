@@ -1,7 +1,7 @@
 """A sub-step that fails is never silent, and one output step's work is bounded (behaviour tier).
 
 The kernel abandons an output step when a sub-step at the smallest size gives a non-finite state
-(``kernel.STEP_NONFINITE``) or when ``kernel.MAX_ATTEMPTS`` sub-steps do not finish it
+(``kernel.STEP_NONFINITE``) or when ``numerics.max_substep_attempts`` sub-steps do not finish it
 (``kernel.STEP_WORK_BOUND``); ``PumpModel.advance`` raises :class:`SolverFailure` naming the time, the
 angle and the reason, and the twin resets the model, counts the reset and says it (docs/node.md).
 """
@@ -51,8 +51,9 @@ def test_non_finite_right_hand_side_is_a_solver_failure_not_a_frozen_state(gear)
 
 def test_one_output_step_does_at_most_the_bounded_work():
     """Behaviour (a stiff burst): a tolerance of 1e-12 asks for about 1e5 sub-steps per output step (the
-    smallest sub-step is 1e-5 of it); the step is abandoned after ``MAX_ATTEMPTS`` attempts, so one call's
-    work has a bound the node can rely on, and the failure is raised, not a silent loss of accuracy."""
+    smallest sub-step is 1e-5 of it); the step is abandoned after ``numerics.max_substep_attempts`` (2000)
+    attempts, so one call's work has a bound the node can rely on, and the failure is raised, not a silent
+    loss of accuracy.  The tight references raise the bound and finish."""
     cfg = load_config()
     tight = replace(cfg, numerics=replace(cfg.numerics, tolerance=1e-12, log_density_tolerance=1e-12))
     m = PumpModel(tight, "fixed")
@@ -60,7 +61,7 @@ def test_one_output_step_does_at_most_the_bounded_work():
     s0 = m.initial_state(inp)
     with pytest.raises(SolverFailure, match="sub-steps did not finish") as exc:
         m.advance(s0, 5 * m.step_size(inp.omega), inp)
-    assert str(K.MAX_ATTEMPTS) in str(exc.value)
+    assert "max_substep_attempts = 2000" in str(exc.value)
     done = m._ws  # the attempts of the abandoned step: accepted + rejected ≤ the bound
     assert done.ctrl[K.CT_STATUS] == K.STEP_WORK_BOUND
 
@@ -102,3 +103,12 @@ def test_the_twin_resets_on_a_solver_failure_and_says_it():
         core.add_sample("delivery_pressure", pd, t * ms, t * ms)
         core.tick(t * ms)
     assert core.status == "running" and np.all(np.isfinite(core.state.pressures))
+
+
+@pytest.mark.parametrize("value", [0, 9, 2.5, 1e8])
+def test_max_substep_attempts_out_of_range_is_refused_naming_the_field(value):
+    """Behaviour: the bound is an integer in [10, 1e7]; anything else is one error naming it."""
+    from gerotor_twin.config import Numerics
+    from gerotor_twin.errors import InputError
+    with pytest.raises(InputError, match=r"numerics\.max_substep_attempts"):
+        Numerics(max_substep_attempts=value)

@@ -84,17 +84,15 @@ C_STEPS, C_CAVITATION, C_CONTACT_UNLOADED, C_HOUSING_CONTACT, C_GEAR_CONTACT, C_
     C_FAILED, C_ABANDONED = range(9)
 N_COUNTERS = 9
 
-#: Sub-step attempts (accepted and rejected) one output step may take before it is abandoned: the bound on one
-#: call's work per output step (≈ 5 µs each: ≈ 10 ms), far above the 2–10 a step takes on the pump family.
-MAX_ATTEMPTS = 2000
-#: :func:`pressure_step`'s status: the output step done, or abandoned (a non-finite sub-step, or the attempts spent).
+#: :func:`pressure_step`'s status: the output step done, or abandoned (a non-finite sub-step, or the attempts spent:
+#: ``numerics.max_substep_attempts`` in ``Workspace.ctrl[CT_BOUND]``, the bound on one call's work per output step).
 STEP_DONE, STEP_NONFINITE, STEP_WORK_BOUND = 0, 1, 2
 
 # how the outer gear moves in integrate()
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE, CT_STATUS = range(7)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(8)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
@@ -352,7 +350,8 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
 
     Returns ``STEP_DONE``, or why the step was abandoned part-way (``y`` then holds the last accepted
     sub-step): ``STEP_NONFINITE``, a sub-step at the smallest size gave a non-finite state;
-    ``STEP_WORK_BOUND``, :data:`MAX_ATTEMPTS` sub-steps did not finish it.  The caller stops there.
+    ``STEP_WORK_BOUND``, ``ws.ctrl[CT_BOUND]`` (``numerics.max_substep_attempts``) sub-step attempts did not
+    finish it.  The caller stops there.
     """
     pc = km.pc
     n1 = y.shape[0]
@@ -366,7 +365,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     attempts = 0
     while done < big_h * (1.0 - 1e-12):
         attempts += 1
-        if attempts > MAX_ATTEMPTS:
+        if attempts > ws.ctrl[CT_BOUND]:
             return STEP_WORK_BOUND
         h = min(h, big_h - done)
         th = theta + op.omega * done

@@ -144,12 +144,13 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (7,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+    ctrl: np.ndarray        #: (8,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
                             #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s];
                             #: how many ports close within the horizon there (flows.closing_ports);
                             #: the chamber pressures' recent range, the error scale's (kernel.update_range) [Pa];
-                            #: why the last output step was abandoned (kernel.STEP_*)
+                            #: why the last output step was abandoned (kernel.STEP_*);
+                            #: the sub-step attempts an output step may take (numerics.max_substep_attempts)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`)
     peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
@@ -236,6 +237,6 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(7),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(8),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
                      gear_rows=np.zeros((n, N_ROWS)))

@@ -41,7 +41,8 @@ class SolverFailure(FloatingPointError):
 
 #: Why an output step was abandoned, as a user reads it (kernel.STEP_*).
 _ABANDONED = {K.STEP_NONFINITE: "a sub-step at the smallest size gave a non-finite state",
-              K.STEP_WORK_BOUND: f"{K.MAX_ATTEMPTS} sub-steps did not finish it (the bound on one step's work)"}
+              K.STEP_WORK_BOUND: "numerics.max_substep_attempts = {bound} sub-steps did not finish it (the bound on "
+                                 "one step's work)"}
 
 #: The kernel's oil properties are re-evaluated when the oil temperature has moved by more
 #: than this since the last evaluation [K] (μ of a VG46 oil changes by ≈ 0.2 % over it at 40 °C).
@@ -217,6 +218,7 @@ class PumpModel:
         ws = self._ws
         ws.ctrl[K.CT_SUBSTEP] = state.substep
         ws.ctrl[K.CT_RANGE] = state.pressure_range
+        ws.ctrl[K.CT_BOUND] = self.config.numerics.max_substep_attempts
         if n:
             if self._move == K.MOVE_EXTERNAL:
                 with self._first_use():
@@ -227,7 +229,8 @@ class PumpModel:
                                        counters, vols, self._move)
             K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel.eos)
         if counters[K.C_ABANDONED] != state.counters[K.C_ABANDONED]:
-            why = _ABANDONED.get(int(ws.ctrl[K.CT_STATUS]), "unknown status")
+            why = _ABANDONED.get(int(ws.ctrl[K.CT_STATUS]), "unknown status").format(
+                bound=self.config.numerics.max_substep_attempts)
             raise SolverFailure(f"output step at t = {t:.6g} s, shaft angle {math.degrees(theta) % 360.0:.1f}° "
                                 f"abandoned: {why}")
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):

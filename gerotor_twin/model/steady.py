@@ -93,11 +93,13 @@ class SteadyResult:
 
 
 def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, max_step_s: float | None = None):
-    """The same pump with tight solver settings: ``tolerance`` on ln(ρ/ρ₀) everywhere (the reference mode)."""
+    """The same pump with tight solver settings: ``tolerance`` on ln(ρ/ρ₀) everywhere (the reference mode),
+    and a work bound per output step (``max_substep_attempts``) an offline run never meets."""
     n = cfg.numerics
     return replace(cfg, numerics=replace(n, tolerance=tolerance, max_step_deg=max_step_deg,
                                          max_step_s=n.max_step_s if max_step_s is None else max_step_s,
-                                         error_measure="log_density", rate_fraction=0.0))
+                                         error_measure="log_density", rate_fraction=0.0,
+                                         max_substep_attempts=1_000_000))
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,

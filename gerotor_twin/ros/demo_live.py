@@ -36,9 +36,8 @@ import threading
 import time
 from pathlib import Path
 
-import yaml
-
 from gerotor_twin.resources import share_dir
+from gerotor_twin.yaml_safe import load_yaml_file
 from gerotor_twin.units import m3s_to_lpm
 
 #: The package's data (bags, config): the source tree in a checkout, share/gerotor_twin when installed.
@@ -149,7 +148,7 @@ def _live_twin(args, log_dir: Path) -> Path | None:
 def calibration_note(pump_yaml) -> str:
     """What a pump file's ``calibration`` block says, in one line: bags, plateaus, the fitted clearance
     factor(s) and the volumetric-efficiency RMSE before and after the fit; or that it has no such block."""
-    cal = (yaml.safe_load(Path(pump_yaml).read_text()) or {}).get("calibration")
+    cal = (load_yaml_file(pump_yaml) or {}).get("calibration")
     if not isinstance(cal, dict):
         return f"{pump_yaml}: no calibration block"
     parts = [f"{c['combination']} x {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}-{c['factor_ci95'][1]:.4f})"
