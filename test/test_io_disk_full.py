@@ -11,7 +11,6 @@ import errno
 import io
 import os
 import random
-import subprocess
 import time
 from pathlib import Path
 
@@ -168,22 +167,9 @@ def test_written_counts_both_files_after_a_resume(tmp_path, monkeypatch):
     assert len(files) == 2
 
 
-@pytest.fixture
-def tmpfs(tmp_path):
-    mnt = tmp_path / "disk"
-    mnt.mkdir()
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=96k", "tmpfs", str(mnt)], capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip() or r.returncode}")
-    try:
-        yield mnt
-    finally:
-        subprocess.run(["umount", "-l", str(mnt)], check=False)
-
-
-def test_written_is_what_recovery_finds_on_a_small_filesystem(tmp_path, tmpfs):
+def test_written_is_what_recovery_finds_on_a_small_filesystem(tmp_path, small_filesystem):
     """Behaviour: the same on a real 96 kB tmpfs that fills up (ENOSPC from the kernel)."""
+    tmpfs = small_filesystem("96k")
     path = tmpfs / "twin.mcap"
     bg = BackgroundMcapLog(McapLog(path, chunk_size=4096), max_queue=100_000, flush_interval_s=0.01)
     for t in TOPICS:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import subprocess
 import time
 import uuid
 import warnings
@@ -157,17 +156,8 @@ def test_sigkill_recover_and_recovery_at_next_start(tmp_path):
 
 
 @pytest.fixture
-def small_disk(tmp_path):
-    mnt = tmp_path / "disk"
-    mnt.mkdir()
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(mnt)], capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip() or r.returncode}")
-    try:
-        yield mnt
-    finally:
-        subprocess.run(["umount", "-l", str(mnt)], check=False)
+def small_disk(small_filesystem):
+    return small_filesystem("4m")
 
 
 def test_disk_full_error_recoverable_and_resumes(tmp_path, small_disk):

@@ -46,6 +46,7 @@ from typing import Any
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.hydraulics.orifice import ORIFICE_LAWS
 
+from .profile_file import name_and_description
 from .sensors import BenchSpec
 
 __all__ = ["BenchPump", "PUMP_FIELDS", "SENSOR_FIELDS", "load_bench_pump", "parse_bench_pump"]
@@ -82,7 +83,6 @@ SENSOR_FIELDS: dict[str, tuple[str, tuple]] = {
 #: Sections of ``pump`` whose keys replace the nominal config's keys of the same section and name.
 _REPLACED_SECTIONS = ("orifice", "mixture", "leakage")
 _TOP_KEYS = ("name", "description", "pump", "sensors")
-_NAME = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 _MAX_DESCRIPTION = 400
 
 
@@ -226,12 +226,7 @@ def parse_bench_pump(raw, name: str = "bench_pump", where: str = "", source: str
         Text of the file, kept (and recorded in the bag's metadata).
     """
     raw = _mapping(raw, f"{where}(document)", _TOP_KEYS, where)
-    name = raw.get("name", name)
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise InputError(f"{where}name", name, "1-64 letters, digits, _ or -")
-    description = raw.get("description", "")
-    if not isinstance(description, str) or len(description) > _MAX_DESCRIPTION:
-        raise InputError(f"{where}description", description, f"a text of at most {_MAX_DESCRIPTION} characters")
+    name, description = name_and_description(raw, name, where, _MAX_DESCRIPTION)
     pump = _section(raw.get("pump"), f"{where}pump", PUMP_FIELDS)
     sensors = _section(raw.get("sensors"), f"{where}sensors", SENSOR_FIELDS)
     return BenchPump(name=name, description=description, **pump, sensors=sensors, source=source)

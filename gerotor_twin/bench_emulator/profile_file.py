@@ -29,7 +29,7 @@ from gerotor_twin.errors import InputError
 
 from .profiles import MAX_PROFILE_S, MIN_SEGMENT_S, OIL_RANGE_C, REFERENCE_RANGE, Profile, Segment
 
-__all__ = ["load_profile_file", "parse_profile"]
+__all__ = ["load_profile_file", "parse_profile", "name_and_description"]
 
 _TOP_KEYS = ("name", "description", "segments")
 _SEGMENT_KEYS = ("duration_s", "rpm", "bar", "ramp", "oil_temperature_c")
@@ -93,18 +93,27 @@ def parse_profile(raw, name: str, limits: OperatingRange = REFERENCE_RANGE, wher
     if unknown:
         raise InputError(f"{where}{unknown[0]}", raw.get(unknown[0]), f"one of the keys {', '.join(_TOP_KEYS)}",
                          "unknown key")
-    name = raw.get("name", name)
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise InputError(f"{where}name", name, "1-64 letters, digits, _ or - (it names the default output file)")
-    description = raw.get("description", "")
-    if not isinstance(description, str) or len(description) > _MAX_DESCRIPTION:
-        raise InputError(f"{where}description", description, f"a text of at most {_MAX_DESCRIPTION} characters")
+    name, description = name_and_description(raw, name, where, _MAX_DESCRIPTION, " (it names the default output file)")
     segs = raw.get("segments")
     if not isinstance(segs, list) or not segs:
         raise InputError(f"{where}segments", segs, "a list of at least one segment",
                          "missing key" if segs is None else "")
     return Profile(name, tuple(_segment(s, i, where, limits) for i, s in enumerate(segs)),
                    description, limits, where, source)
+
+
+def name_and_description(raw: dict, name: str, where: str, max_description: int, name_use: str = "") -> tuple[str, str]:
+    """The ``name`` (default ``name``) and ``description`` (default empty) of an emulator file's document
+    ``raw``, validated: a name of 1-64 letters, digits, _ or -, a description of at most ``max_description``
+    characters.  ``where``: prefix of the field names in errors; ``name_use``: what the name is for, said in
+    its error."""
+    name = raw.get("name", name)
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise InputError(f"{where}name", name, "1-64 letters, digits, _ or -" + name_use)
+    description = raw.get("description", "")
+    if not isinstance(description, str) or len(description) > max_description:
+        raise InputError(f"{where}description", description, f"a text of at most {max_description} characters")
+    return name, description
 
 
 def load_profile_file(path: str | Path, limits: OperatingRange = REFERENCE_RANGE) -> Profile:
