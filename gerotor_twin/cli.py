@@ -368,7 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "twice its output-step refinement (largest budget figure, as a fraction of its budget)")
     b.add_argument("--numerics", metavar="KEY=VALUE[,...]",
                    help="accuracy / realtime: override numerics fields of every pump (e.g. tolerance=0.02,"
-                        "rate_fraction=0), to compare step-control settings on the same references")
+                        "closing_tolerance=1), to compare step-control settings on the same references")
     b.add_argument("--reference-cache", metavar="DIR", default=None,
                    help="accuracy: directory of cached reference revolutions (default $GEROTOR_TWIN_CACHE/references "
                         "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")

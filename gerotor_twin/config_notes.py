@@ -47,6 +47,12 @@ KEY_NOTES: dict[str, KeyNote] = {
         "changed", "numerics.tolerance is a fraction of the pressure scale max(p_d - p_s, 1 bar, chamber pressure range) "
                    "(error_measure: pressure, the default); in older pump files it was an error on ln(rho), about 5e-5: remove the key to use the default, "
                    "or set error_measure: log_density for the old meaning"),
+    "numerics.rate_fraction": KeyNote(
+        "removed", "the sub-step cap it set is covered by numerics.closing_tolerance, which holds the chambers whose "
+                   "delivery port closes or has just opened (docs/numerics.md)"),
+    "numerics.top_tolerance": KeyNote(
+        "removed", "the bound on a pressure top hidden inside a sub-step is covered by numerics.closing_tolerance "
+                   "(docs/numerics.md)"),
 }
 
 #: ``section.key`` -> ``section.other``: the key's default holds only with ``other`` at its default.

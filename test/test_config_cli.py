@@ -248,6 +248,18 @@ def test_removed_key_is_a_notice_not_an_error(monkeypatch):
     assert "substep_factor" in r["numerics"]                # the caller's mapping is left as it was
 
 
+@pytest.mark.parametrize("key,value", [("rate_fraction", 0.3), ("top_tolerance", 1.0)])
+def test_a_pump_file_with_a_removed_step_control_key_still_loads(key, value):
+    """Behaviour: a pump file written when ``numerics.rate_fraction`` / ``top_tolerance`` existed loads with
+    the defaults and one notice naming the key and what covers it now."""
+    r = raw()
+    r["numerics"][key] = value
+    cfg = parse_config(r)
+    assert cfg.numerics == parse_config(raw()).numerics
+    assert len(cfg.notes) == 1 and cfg.notes[0].startswith(f"numerics.{key} is no longer used and is ignored")
+    assert "closing_tolerance" in cfg.notes[0]
+
+
 def test_shipped_pump_files_have_no_notes():
     """Behaviour: the packaged pump and the family load without a note (the range rule fits what is shipped)."""
     files = [default_config_path(), *sorted((ROOT / "config" / "pumps").glob("*.yaml")),

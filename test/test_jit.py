@@ -147,7 +147,7 @@ def test_every_pump_passes_the_kernel_the_same_types(cfg):
     raw0 = _raw(default_config_path())
     base = types(raw0)
     ints = copy.deepcopy(raw0)
-    ints["numerics"].update(closing_tolerance=1, top_tolerance=0, table_points=1024)
+    ints["numerics"].update(closing_tolerance=1, table_points=1024)
     ints["orifice"].update(cd_max=1, lambda_crit=1000)
     ints["fluid"]["atmospheric_pa"] = 101325
     ints["mixture"]["polytropic_index"] = 1

@@ -177,13 +177,13 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ),
     Δp_ref = max(p_d − p_s, 1 bar, the chamber pressures' recent range carried in the state);
     for a chamber whose delivery port is closing or has just opened (flagged by ``closing_ports``: time to
-    close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.25
+    close > 0, or −its age A_d / (ω dA_d/dθ) < 0) tol is multiplied by ``numerics.closing_tolerance`` (0.15
     in the packaged config) and β_i replaced by max(β_i, β(p_d)) (its ln ρ error counts as it
     will at delivery pressure), elsewhere not."""
     m, inp, s = warm
     km = m.kernel
     pc = km.pc
-    assert pc.closing_tolerance == m.config.numerics.closing_tolerance == 0.25
+    assert pc.closing_tolerance == m.config.numerics.closing_tolerance == 0.15
     op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
     ws, n = m._ws, m.N
     c = n + 1

@@ -56,10 +56,10 @@ BENCH_TOPICS = {
 EMULATOR_METADATA = "gerotor_twin.bench_emulator"
 SHAFT_JOINT = "pump_shaft"
 #: Numerics of the emulated pump, fixed (not the twin's defaults): 0.5° output steps and
-#: 5e-5 on ln(ρ/ρ₀), no sub-step cap, so the "bench" is the better-resolved of the two and a
+#: 5e-5 on ln(ρ/ρ₀), so the "bench" is the better-resolved of the two and a
 #: change of the twin's numerics settings does not change what the emulator writes (a change of
 #: the integrator itself does: ∂f/∂t in the stages, say).
-EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density", "rate_fraction": 0.0,
+EMULATOR_NUMERICS = {"max_step_deg": 0.5, "tolerance": 5e-5, "error_measure": "log_density",
                      "max_substep_attempts": 1_000_000}
 
 

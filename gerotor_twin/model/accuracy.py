@@ -221,8 +221,7 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
     ps = cfg.boundary.suction_pressure_pa
     row = {"rpm": rpm, "bar": bar, "model": model,
            "numerics": {k: getattr(cfg.numerics, k) for k in ("max_step_deg", "tolerance", "error_measure",
-                                                               "log_density_tolerance", "rate_fraction",
-                                                               "closing_tolerance", "top_tolerance")}}
+                                                               "log_density_tolerance", "closing_tolerance")}}
     row.update(compare(Revolution.of(res), ref, ps, bar_gauge_to_pa_abs(bar, cfg.fluid.atmospheric_pa),
                        cfg.fluid.atmospheric_pa))
     row["rtf"], row["substeps_per_revolution"] = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)

@@ -17,15 +17,11 @@ Without f_t a stiff chamber on a moving quasi-equilibrium (an opening or
 closing port) lags it by ≈ 0.71 of its movement per sub-step (docs/numerics.md).
 A port that closes during the sub-step would, linearised, keep closing through
 zero area: its share of f_t is scaled by min(1, t_c/h), t_c its time to close
-(:func:`.flows.closing_ports`).  The sub-step is also capped so that no chamber
-pressure moves by more than ``numerics.rate_fraction`` × Δp_ref in it (Δp_ref: the
-error scale, below), and a chamber whose delivery port closes within four output steps (or opened
-within the last one) has its error tolerance multiplied by
+(:func:`.flows.closing_ports`).  A chamber whose delivery port closes within four output
+steps (or opened within the last one) has its error tolerance multiplied by
 ``numerics.closing_tolerance``: the pressure spike of the throttled, compressed
 chamber forms there (and that of a chamber refilled from the delivery kidney), and
-the embedded error estimate under-reads it (docs/numerics.md).  A sub-step inside
-which a chamber pressure turns from rising to falling is also held to the bound on
-the top it may hide (``numerics.top_tolerance``, :func:`_top_error`).  The error of a
+the embedded error estimate under-reads it (docs/numerics.md).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to Δp_ref, the larger of p_delivery − p_suction and the range of
 the chamber pressures over about the last revolution (highest peak − lowest pressure, updated
@@ -92,7 +88,7 @@ STEP_DONE, STEP_NONFINITE, STEP_WORK_BOUND = 0, 1, 2
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 # Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_HCAP, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(8)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(7)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
@@ -244,14 +240,6 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     _error_weights(km, op, ws)
-    cap = math.inf
-    if op.rate_dp > 0.0:    # numerics.rate_fraction: sub-step cap from the fastest chamber pressure, read in pressure_step
-        r = 0.0
-        for j in range(km.pc.n):
-            r = max(r, ws.beta[j] * abs(ws.f0[j]))
-        if r > 0.0:
-            cap = op.rate_dp * (error_scale(op, ws) / op.dp_ref) / r
-    ws.ctrl[CT_HCAP] = cap
     h = ws.ctrl[CT_PENDING]
     if h > 0.0:
         _track_peak(y, h, km.pc.n, ws)
@@ -290,7 +278,6 @@ def ros2_step(y, th, h, km, op, ws):
         ws.y1[i] = y[i] + h * ws.k1[i]
     rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, False)
     for i in range(n1):
-        ws.y1[i] = ws.f1[i]                                # slopes at the predicted end (for _top_error)
         ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
     en = 0.0
@@ -301,42 +288,6 @@ def ros2_step(y, th, h, km, op, ws):
         v = abs(ws.err[i]) * ws.wt[i]
         if not (v <= en):          # also catches NaN
             en = v
-    pc = km.pc
-    if pc.top_tolerance > 0.0 and pc.error_measure == ERROR_PRESSURE:
-        en = _top_error(y, ws.ynew, ws.f0, ws.y1, ws.beta, pc.n, h,
-                        pc.top_tolerance * pc.tolerance * error_scale(op, ws), en)
-    return en
-
-
-@njit          # called: a short loop, its cost is the sub-steps it rejects (docs/performance.md)
-def _top_error(y, ynew, f0, f1, beta, n, h, lim, en):
-    r"""``en`` raised by the pressure top a sub-step may hide, relative to its allowance.
-
-    Where chamber i's ln ρ (``y`` → ``ynew``) rises at the start of the sub-step (slope ``f0``) and
-    falls at its predicted end (``f1``: the second stage's right-hand side, kept in ``ws.y1``), a top
-    lies inside.
-    If the trajectory is concave there, it lies below both end tangents, so above the higher end it
-    is at most
-
-    .. math::
-        m = h f_0 t^* - \max(0, \Delta),\qquad t^* = \frac{\Delta - h f_1}{h (f_0 - f_1)},
-
-    Δ = y_{n+1,i} − y_{n,i}: where the tangents cross.  The sub-step is rejected (the returned
-    value > 1) when β_i m exceeds ``lim`` = ``top_tolerance`` × ``tolerance`` × Δp_ref [Pa].  Neither the
-    embedded error estimate nor the peak output (:func:`_track_peak`, whose continuous extension is
-    convex under such a top) sees it: without this a spike's top between sub-steps was missed by
-    up to −2.3 % of the pressure difference (docs/numerics.md).
-    """
-    for i in range(n):
-        s0 = h * f0[i]
-        s1 = h * f1[i]
-        if s0 > 0.0 and s1 < 0.0:
-            d = ynew[i] - y[i]
-            ts = (d - s1) / (s0 - s1)
-            if 0.0 < ts < 1.0:
-                v = (s0 * ts - max(d, 0.0)) * beta[i] / lim
-                if v > en:
-                    en = v
     return en
 
 
@@ -369,9 +320,9 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             return STEP_WORK_BOUND
         h = min(h, big_h - done)
         th = theta + op.omega * done
-        if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ): also the rate cap
+        if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ)
             _first_stage(y, th, km, op, ws, integrals, big_h)
-        h = min(max(min(h, ws.ctrl[CT_HCAP]), h_min), big_h - done)
+        h = min(max(h, h_min), big_h - done)
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])

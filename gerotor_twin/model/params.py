@@ -94,7 +94,6 @@ class PumpConstants(NamedTuple):
     orifice_law: int = 0          #: LAW_FLOW_NUMBER or LAW_MERRITT (hydraulics.orifice)
     laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
     closing_tolerance: float = 1.0  #: factor on ``tolerance`` where a delivery port is closing (numerics) [-]
-    top_tolerance: float = 0.0    #: factor on ``tolerance`` for a top hidden inside a sub-step (numerics; 0: off) [-]
     gear_in_stages: bool = False  #: the mobility gear's squeeze inside the ROS2 stages (numerics.gear_coupling) [-]
 
 
@@ -115,7 +114,6 @@ class Operating(NamedTuple):
     dp_ref: float       #: floor of the error measure's pressure scale, max(p_d − p_s, 1 bar) [Pa] (kernel.error_scale)
     beta_d: float = 0.0  #: β(p_d), bulk modulus at the delivery pressure [Pa]
     rho_d: float = 1.0   #: e^{s_d} = ρ(p_d)/ρ₀ [-]
-    rate_dp: float = 0.0  #: sub-step ≤ rate_dp / max |dp/dt| of the chambers (numerics.rate_fraction × dp_ref; 0: off) [Pa]
 
 
 class Workspace(NamedTuple):
@@ -144,9 +142,8 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (8,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+    ctrl: np.ndarray        #: (7,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
-                            #: sub-step cap of ``numerics.rate_fraction`` at the current (y, θ) [s];
                             #: how many ports close within the horizon there (flows.closing_ports);
                             #: the chamber pressures' recent range, the error scale's (kernel.update_range) [Pa];
                             #: why the last output step was abandoned (kernel.STEP_*);
@@ -192,7 +189,6 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         restriction_area=config.boundary.restriction_area_m2, p_tank=f.atmospheric_pa,
         tolerance=n.tolerance, error_measure=measure,
         log_density_tolerance=n.log_density_tolerance, closing_tolerance=n.closing_tolerance,
-        top_tolerance=n.top_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta,
         gear_in_stages=n.gear_coupling == "stages")
     return typed(KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air)))
@@ -213,8 +209,8 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
     return typed(KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air)))
 
 
-def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fraction: float = 0.0) -> Operating:
-    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa] (``rate_fraction``: numerics.rate_fraction).
+def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:
+    """The :class:`Operating` record of one ``advance`` call [rad/s, Pa].
 
     ``dp_ref`` is the floor of the sub-step error scale; the kernel takes the larger of it and the chamber
     pressures' recent range (:func:`.kernel.error_scale`).
@@ -223,8 +219,7 @@ def operating(km: KernelModel, omega: float, p_s: float, p_d: float, rate_fracti
     dp_ref = max(p_d - p_s, 1e5)
     s_d = log_density_of(p_d, km.eos)
     return typed(Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
-                           s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d),
-                           rate_dp=float(rate_fraction) * dp_ref))
+                           s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d)))
 
 
 def workspace(n: int) -> Workspace:
@@ -237,6 +232,6 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(8),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(7),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
                      gear_rows=np.zeros((n, N_ROWS)))

@@ -210,8 +210,7 @@ class PumpModel:
         rec_p = np.zeros((n, self.N))
         rec_peak = np.zeros((n, self.N))
         rec_g = np.zeros((n, self.N))
-        op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery,
-                       self.config.numerics.rate_fraction)
+        op = operating(self.kernel, inputs.omega, inputs.p_suction, inputs.p_delivery)
         if not self.restriction_mode:
             y[self.N] = op.s_d
         theta, t = state.theta, state.t

@@ -98,7 +98,7 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, m
     n = cfg.numerics
     return replace(cfg, numerics=replace(n, tolerance=tolerance, max_step_deg=max_step_deg,
                                          max_step_s=n.max_step_s if max_step_s is None else max_step_s,
-                                         error_measure="log_density", rate_fraction=0.0,
+                                         error_measure="log_density",
                                          max_substep_attempts=1_000_000))
 
 
