@@ -1,7 +1,7 @@
 """The sub-step error scale Δp_ref: the larger of p_d − p_s and the chamber pressures' recent range.
 
-Closed-form tests of the two small functions that make it (:func:`gerotor_twin.model.kernel.update_range`,
-:func:`gerotor_twin.model.kernel.error_scale`), and behaviour tests that the range the model carries in its
+Closed-form tests of the two small functions that make it (:func:`gerotor_twin.model.step_control.update_range`,
+:func:`gerotor_twin.model.step_control.error_scale`), and behaviour tests that the range the model carries in its
 state is the range of the waveform the error budget is stated on (docs/numerics.md, "Step control").
 """
 import math
@@ -13,6 +13,7 @@ from gerotor_twin.config import load_config
 from gerotor_twin.model.accuracy import reference_revolution
 from gerotor_twin.model.family import family_dir
 from gerotor_twin.model import kernel as K
+from gerotor_twin.model import step_control as SC
 from gerotor_twin.model.params import operating, workspace
 from gerotor_twin.model.pump import PumpModel
 from gerotor_twin.model.steady import run_steady
@@ -21,7 +22,7 @@ from gerotor_twin.model.steady import run_steady
 def _range_after(previous, peak, pres, fade):
     ctrl = np.zeros(6)
     ctrl[K.CT_RANGE] = previous
-    K.update_range(ctrl, np.asarray(peak, float), np.asarray(pres, float), len(pres), fade)
+    SC.update_range(ctrl, np.asarray(peak, float), np.asarray(pres, float), len(pres), fade)
     return ctrl[K.CT_RANGE]
 
 
@@ -49,14 +50,14 @@ def test_pressure_range_fades_by_one_e_per_revolution(revolutions):
 
 
 def test_error_scale_is_the_larger_of_the_pressure_difference_and_the_range(cfg):
-    """Closed form: Δp_ref = max(p_d − p_s, 1 bar, range) (:func:`kernel.error_scale`)."""
+    """Closed form: Δp_ref = max(p_d − p_s, 1 bar, range) (:func:`step_control.error_scale`)."""
     km = PumpModel(cfg, "fixed").kernel
     ws = workspace(km.pc.n)
     ps = 1e5
     for pd, rng, want in ((29e5, 0.0, 28e5), (3e5, 40e5, 40e5), (1.2e5, 0.0, 1e5), (1.2e5, 0.5e5, 1e5)):
         op = operating(km, 300.0, ps, pd)
         ws.ctrl[K.CT_RANGE] = rng
-        assert K.error_scale(op, ws) == pytest.approx(want, rel=1e-15)
+        assert SC.error_scale(op, ws) == pytest.approx(want, rel=1e-15)
 
 
 def test_a_run_split_at_step_boundaries_is_the_run_in_one_call(cfg):

@@ -13,6 +13,7 @@ from gerotor_twin.hydraulics.fluid import log_density
 from gerotor_twin.hydraulics.state_equation import log_density_of, pressure_of
 from gerotor_twin.model import flows as F
 from gerotor_twin.model import kernel as K
+from gerotor_twin.model import step_control as SC
 from gerotor_twin.model.params import operating
 from gerotor_twin.model.pump import Inputs, PumpModel
 
@@ -193,7 +194,7 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
     seen = {True: 0, False: 0}
     for theta in np.linspace(s.theta, s.theta + m.tables.shift, 23):
         _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])     # closing_ports: ws.jac
-        K._error_weights(km, op, ws)
+        SC.error_weights(km, op, ws)
         for j in range(n):
             tcd = ws.jac[j, c + F.J_TCD]
             closing = bool(tcd != 0)

@@ -67,7 +67,9 @@ from .contact import contact
 from .flows import J_TCD, closing_ports, closing_share, rhs
 from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
 from .loads import outer_gear_load
-from .params import ERROR_PRESSURE, FL_DELIVERY
+from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
+                     FL_DELIVERY)
+from .step_control import error_norm, error_weights, step_factor, update_range
 from .volumes import move_volumes
 
 # ------------------------------------------------------------------ outputs
@@ -86,9 +88,6 @@ STEP_DONE, STEP_NONFINITE, STEP_WORK_BOUND = 0, 1, 2
 
 # how the outer gear moves in integrate()
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
-
-# Workspace.ctrl
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(7)
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
@@ -143,59 +142,6 @@ def lu_solve(a, piv, b, x):
 
 # ------------------------------------------------------------------ stepping
 @njit(inline="always")
-def error_scale(op, ws):
-    """Δp_ref [Pa], the pressure scale of the sub-step error: the larger of ``op.dp_ref`` (p_d − p_s, at least
-    1 bar) and the chamber pressures' recent range ``ws.ctrl[CT_RANGE]`` (:func:`update_range`)."""
-    return max(op.dp_ref, ws.ctrl[CT_RANGE])
-
-
-@njit
-def update_range(ctrl, peak, pres, n, fade):
-    r"""The chamber pressures' recent range after an output step, into ``ctrl[CT_RANGE]`` [Pa].
-
-    .. math:: R_k = \max\left(R_{k-1} f,\; \max_i \max(\hat p_i, p_i) - \min_i p_i\right),
-              \qquad f = e^{-\omega h / 2\pi}
-
-    over the n chambers: p_i their pressures at the step's end, p̂_i their peaks over the step so far
-    (``ws.peak``); f fades the range by 1/e per revolution.  At every instant some chamber is near suction
-    pressure and, once a revolution, one at its spike, so R is about the waveform's range over the last
-    revolution: the scale the error budget is stated on (docs/numerics.md).  Updated per output step, not
-    per call, so a run split into calls at step boundaries is the run in one call.
-    """
-    hi = -math.inf
-    lo = math.inf
-    for i in range(n):
-        hi = max(hi, peak[i], pres[i])
-        lo = min(lo, pres[i])
-    ctrl[CT_RANGE] = max(ctrl[CT_RANGE] * fade, hi - lo)
-
-
-@njit(inline="always")
-def _error_weights(km, op, ws):
-    """Per-volume weights w with ‖err‖ = max |err_i| w_i ≤ 1 accepted.
-
-    Pressure measure: w_i = β_i / (tol·Δp_ref) (:func:`error_scale`), at least 1/``log_density_tolerance``.  A chamber whose
-    delivery port closes or has just opened (``J_TCD`` ≠ 0, :func:`.flows.closing_ports`) is held to
-    ``closing_tolerance``·tol and weighed with max(β_i, β(p_d)): an error δ in its ln ρ, made while
-    it is still near suction pressure where β_i is small, becomes a pressure error β(p_d)·δ once the
-    delivery kidney has filled it (a just-opened chamber at 1 bar: β_i ≈ 0.1 GPa against 1.5 GPa).
-    """
-    pc = km.pc
-    for i in range(pc.n + 1):
-        if i == pc.n and not pc.restriction:
-            ws.wt[i] = 0.0                                          # the delivered-volume quadrature
-        elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
-            tol = pc.tolerance
-            beta = ws.beta[i]
-            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
-                tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
-                beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
-            ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
-        else:
-            ws.wt[i] = 1.0 / pc.tolerance
-
-
-@njit(inline="always")
 def _track_peak(y, h, n, ws):
     r"""Raise ``ws.peak`` to the max of each chamber's ln ρ over the accepted sub-step of h [s] that ended at y.
 
@@ -239,7 +185,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     if ws.gear[GC_ON] != 0.0:
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
-    _error_weights(km, op, ws)
+    error_weights(km, op, ws)
     h = ws.ctrl[CT_PENDING]
     if h > 0.0:
         _track_peak(y, h, km.pc.n, ws)
@@ -280,15 +226,10 @@ def ros2_step(y, th, h, km, op, ws):
     for i in range(n1):
         ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
-    en = 0.0
     for i in range(n1):
         ws.ynew[i] = y[i] + 1.5 * h * ws.k1[i] + 0.5 * h * ws.k2[i]
         ws.err[i] = 0.5 * h * (ws.k1[i] + ws.k2[i])        # against the embedded first-order y + h k1
-    for i in range(n1):
-        v = abs(ws.err[i]) * ws.wt[i]
-        if not (v <= en):          # also catches NaN
-            en = v
-    return en
+    return error_norm(ws.err, ws.wt)
 
 
 @njit(inline="always")
@@ -347,11 +288,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             counters[C_SUBSTEPS] += 1
         else:
             counters[C_REJECTED] += 1                  # stage 1 stays valid: same (y, θ)
-        if not math.isfinite(en):
-            fac = 0.2                                   # overflow in the stages: shrink, down to h_min
-        else:
-            fac = 4.0 if en < 1e-8 else min(4.0, max(0.2, 0.9 / math.sqrt(en)))
-        h = max(h * fac, h_min)
+        h = max(h * step_factor(en), h_min)
     ws.ctrl[CT_SUBSTEP] = h
     return STEP_DONE
 

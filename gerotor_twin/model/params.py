@@ -34,7 +34,8 @@ from ..hydraulics.state_equation import (StateEquation, bulk_modulus_of, exp_sma
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
-           "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE"]
+           "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE",
+           "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND"]
 
 #: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
 #: delivered (net out of the delivery port, after the line leakages) [m³/s], in through the
@@ -45,8 +46,13 @@ __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspa
 N_FLOWS = 7
 
 #: Error measures of the sub-step control: on ln(ρ/ρ₀) (absolute) or on the pressure,
-#: relative to the error scale (``kernel.error_scale``).
+#: relative to the error scale (``step_control.error_scale``).
 ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
+
+#: ``Workspace.ctrl`` entries: the proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ); the
+#: pending sub-step [s]; how many ports close within the horizon; the chamber pressures' recent range [Pa]; why
+#: the last output step was abandoned; the sub-step attempts an output step may take (see ``Workspace.ctrl``)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(7)
 
 
 #: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
@@ -111,7 +117,7 @@ class Operating(NamedTuple):
     p_d: float          #: delivery pressure, absolute [Pa] (initial value in restriction mode)
     rho_s: float        #: ρ(p_s)/ρ₀ [-]
     s_d: float          #: ln(ρ(p_d)/ρ₀) [-]
-    dp_ref: float       #: floor of the error measure's pressure scale, max(p_d − p_s, 1 bar) [Pa] (kernel.error_scale)
+    dp_ref: float       #: floor of the error measure's pressure scale, max(p_d − p_s, 1 bar) [Pa] (step_control.error_scale)
     beta_d: float = 0.0  #: β(p_d), bulk modulus at the delivery pressure [Pa]
     rho_d: float = 1.0   #: e^{s_d} = ρ(p_d)/ρ₀ [-]
 
@@ -145,7 +151,7 @@ class Workspace(NamedTuple):
     ctrl: np.ndarray        #: (7,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
                             #: how many ports close within the horizon there (flows.closing_ports);
-                            #: the chamber pressures' recent range, the error scale's (kernel.update_range) [Pa];
+                            #: the chamber pressures' recent range, the error scale's (step_control.update_range) [Pa];
                             #: why the last output step was abandoned (kernel.STEP_*);
                             #: the sub-step attempts an output step may take (numerics.max_substep_attempts)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
@@ -213,7 +219,7 @@ def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operatin
     """The :class:`Operating` record of one ``advance`` call [rad/s, Pa].
 
     ``dp_ref`` is the floor of the sub-step error scale; the kernel takes the larger of it and the chamber
-    pressures' recent range (:func:`.kernel.error_scale`).
+    pressures' recent range (:func:`.step_control.error_scale`).
     """
     omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # one compiled specialisation (_jit.typed)
     dp_ref = max(p_d - p_s, 1e5)

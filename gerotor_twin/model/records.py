@@ -56,7 +56,7 @@ class PumpState:
     swept_angle: float = 0.0    #: ∫ω dt since start [rad]
     substep: float = 0.0        #: proposed ROS2 sub-step for the next call [s] (0: the output step)
     #: the chamber pressures' recent range, highest peak − lowest pressure, fading by 1/e per revolution [Pa]
-    #: (the scale of the sub-step error control: :func:`.kernel.update_range`)
+    #: (the scale of the sub-step error control: :func:`.step_control.update_range`)
     pressure_range: float = 0.0
 
     @property

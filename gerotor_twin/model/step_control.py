@@ -1,0 +1,120 @@
+r"""Sub-step control of the ROS2 stepper (:mod:`.kernel`): the error scale, the error weights, the error norm
+and the step-size factor, each a few named lines.
+
+A sub-step of size h is accepted when its error norm is at most 1,
+
+.. math::
+    \lVert e \rVert = \max_i |e_i|\, w_i,\qquad e = \tfrac12 h (k_1 + k_2)
+
+(the difference between ROS2 and its embedded first-order solution y + h k₁ [2]), with per-volume weights
+w_i (:func:`error_weights`) on the pressure scale Δp_ref (:func:`error_scale`, :func:`update_range`).  The
+next sub-step is h times
+
+.. math::
+    \mathrm{fac} = \min\!\big(f_{max}, \max(f_{min},\ 0.9\,\lVert e \rVert^{-1/(\hat q + 1)})\big),\qquad \hat q = 1
+
+the standard controller of [1] (II.4, eq. (4.13); IV.8 for Rosenbrock methods): the embedded solution's
+local error is O(h^{q̂+1}).  Why the scale and the weights are what they are: docs/numerics.md ("The sub-step
+error scale", "Closing ports").
+
+References
+----------
+.. [1] E. Hairer, S.P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer
+   1993, sec. II.4 (automatic step size control); E. Hairer, G. Wanner, *Solving Ordinary Differential
+   Equations II*, 2nd ed., Springer 1996, sec. IV.8.
+.. [2] J.G. Verwer, E.J. Spee, J.G. Blom, W. Hundsdorfer, "A second-order Rosenbrock method applied to
+   photochemical dispersion problems", SIAM J. Sci. Comput. 20 (1999) 1456–1480.
+"""
+from __future__ import annotations
+
+import math
+
+from .._jit import njit
+from .flows import J_TCD
+from .params import CT_RANGE, ERROR_PRESSURE
+
+__all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "error_scale", "update_range", "error_weights", "error_norm",
+           "step_factor"]
+
+SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
+FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
+FACTOR_MAX = 4.0    #: largest factor per sub-step [-]
+_TINY_NORM = 1e-8   #: below this the error norm says nothing about the step: grow by FACTOR_MAX
+
+
+@njit(inline="always")
+def error_scale(op, ws):
+    """Δp_ref [Pa], the pressure scale of the sub-step error: the larger of ``op.dp_ref`` (p_d − p_s, at least
+    1 bar) and the chamber pressures' recent range ``ws.ctrl[CT_RANGE]`` (:func:`update_range`)."""
+    return max(op.dp_ref, ws.ctrl[CT_RANGE])
+
+
+@njit
+def update_range(ctrl, peak, pres, n, fade):
+    r"""The chamber pressures' recent range after an output step, into ``ctrl[CT_RANGE]`` [Pa].
+
+    .. math:: R_k = \max\left(R_{k-1} f,\; \max_i \max(\hat p_i, p_i) - \min_i p_i\right),
+              \qquad f = e^{-\omega h / 2\pi}
+
+    over the n chambers: p_i their pressures at the step's end, p̂_i their peaks over the step so far
+    (``ws.peak``); f fades the range by 1/e per revolution.  At every instant some chamber is near suction
+    pressure and, once a revolution, one at its spike, so R is about the waveform's range over the last
+    revolution: the scale the error budget is stated on (docs/numerics.md).  Updated per output step, not
+    per call, so a run split into calls at step boundaries is the run in one call.
+    """
+    hi = -math.inf
+    lo = math.inf
+    for i in range(n):
+        hi = max(hi, peak[i], pres[i])
+        lo = min(lo, pres[i])
+    ctrl[CT_RANGE] = max(ctrl[CT_RANGE] * fade, hi - lo)
+
+
+@njit(inline="always")
+def error_weights(km, op, ws):
+    """Per-volume weights ``ws.wt`` [-] of :func:`error_norm`, at the first stage of a sub-step.
+
+    Pressure measure: w_i = β_i / (tol·Δp_ref) (:func:`error_scale`), at least 1/``log_density_tolerance``.  A chamber whose
+    delivery port closes or has just opened (``J_TCD`` ≠ 0, :func:`.flows.closing_ports`) is held to
+    ``closing_tolerance``·tol and weighed with max(β_i, β(p_d)): an error δ in its ln ρ, made while
+    it is still near suction pressure where β_i is small, becomes a pressure error β(p_d)·δ once the
+    delivery kidney has filled it (a just-opened chamber at 1 bar: β_i ≈ 0.1 GPa against 1.5 GPa).
+    Log-density measure: w_i = 1/tol.  The delivered-volume quadrature (imposed delivery pressure) has
+    weight 0.
+    """
+    pc = km.pc
+    for i in range(pc.n + 1):
+        if i == pc.n and not pc.restriction:
+            ws.wt[i] = 0.0                                          # the delivered-volume quadrature
+        elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
+            tol = pc.tolerance
+            beta = ws.beta[i]
+            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
+                tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
+                beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
+            ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
+        else:
+            ws.wt[i] = 1.0 / pc.tolerance
+
+
+@njit(inline="always")
+def error_norm(err, wt):
+    """‖err‖ = max_i |err_i| w_i [-]; NaN if any term is NaN (a non-finite estimate is never accepted)."""
+    en = 0.0
+    for i in range(err.shape[0]):
+        v = abs(err[i]) * wt[i]
+        if not (v <= en):          # also catches NaN
+            en = v
+    return en
+
+
+@njit(inline="always")
+def step_factor(en):
+    """The factor [-] on the sub-step just tried (accepted or not) for the next one, from its error norm ``en``:
+    SAFETY·en^(−1/2) within [FACTOR_MIN, FACTOR_MAX] [1]; FACTOR_MIN if ``en`` is not finite (an overflow in the
+    stages: shrink), FACTOR_MAX if it is below 1e-8."""
+    if not math.isfinite(en):
+        return FACTOR_MIN
+    if en < _TINY_NORM:
+        return FACTOR_MAX
+    return min(FACTOR_MAX, max(FACTOR_MIN, SAFETY / math.sqrt(en)))
