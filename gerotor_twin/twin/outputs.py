@@ -26,15 +26,29 @@ topic (relative)            type                             content (SI)
                                                              ``angle_p``): column 0 the angle within the
                                                              revolution [rad], columns 1..N the chamber
                                                              pressures [Pa]
+``twin/chambers/<chamber>/  sensor_msgs/FluidPressure        one topic per chamber, named by
+pressure``                                                   :func:`chamber_names` (``chamber_01`` is
+                                                             ``data[0]`` of ``twin/chamber_pressures``):
+                                                             absolute pressure [Pa], header stamp = model
+                                                             time of the sample, frame ``pump_housing``
+``twin/flow_residual``      sensor_msgs/JointState           once per revolution with a measured flow:
+                                                             ``name`` = :data:`RESIDUAL_FIELDS` (units in
+                                                             the names), ``position`` = the values, header
+                                                             stamp = the revolution's end (model time);
+                                                             :mod:`gerotor_twin.twin.residual`
+``twin/flow_residual/<name>`` std_msgs/Float64               the same values, one topic each
 ==========================  ===============================  ==========================================
 
 An :class:`OutputMessage` is ``(topic, msgtype, stamp_ns, msg)``; ``msg`` is a
 :mod:`gerotor_twin.io.messages` dict ready for
 :func:`gerotor_twin.io.codec.encode` or ``McapLog.write``.  ``stamp_ns`` is the
-clock time of the prediction (the MCAP ``log_time``).
+clock time of the prediction (the MCAP ``log_time``, and the header stamp of the stamped types):
+the model time of the sample, computed over the sample cell that ends there with the bench
+inputs received (node clock) at or before the cell's start.
 """
 from __future__ import annotations
 
+import functools
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -42,8 +56,9 @@ import numpy as np
 from gerotor_twin.io import messages as m
 
 __all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
-           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "summary_messages", "log_topics",
-           "all_finite"]
+           "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "RESIDUAL_FIELDS", "RESIDUAL_VALUE_TOPICS", "VALUE_TOPICS",
+           "summary_messages", "residual_messages", "log_topics", "output_topics", "chamber_names",
+           "chamber_pressure_topics", "is_instant", "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
 DELIVERY_FLOW = "twin/delivery_flow"
@@ -52,6 +67,8 @@ ECCENTRICITY = "twin/eccentricity"
 TOOTH_GAPS = "twin/tooth_gaps"
 CHAMBER_PEAKS = "twin/chamber_peak_pressures"
 CHAMBER_WAVEFORM = "twin/chamber_waveform"
+FLOW_RESIDUAL = "twin/flow_residual"
+CHAMBERS = "twin/chambers"      #: prefix of the per-chamber topics ``twin/chambers/<chamber>/pressure``
 HEALTH = "twin/health"          #: health estimate, once per settled interval (:mod:`gerotor_twin.twin.health`)
 DIAGNOSTICS_TOPIC = "/diagnostics"
 
@@ -65,6 +82,7 @@ OUTPUT_TOPICS: dict[str, str] = {
     CHAMBER_PEAKS: m.FLOAT64_MULTIARRAY,
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
     HEALTH: m.FLOAT64_MULTIARRAY,
+    FLOW_RESIDUAL: m.JOINT_STATE,
 }
 
 #: The outputs published at ``publish_rate_hz`` (instantaneous values).
@@ -76,10 +94,51 @@ SUMMARY_VALUE_TOPICS = tuple(f"{FLOW_SUMMARY}/{f}" for f in SUMMARY_FIELDS)
 OUTPUT_TOPICS.update({t: m.FLOAT64 for t in SUMMARY_VALUE_TOPICS})
 #: Its layout label (the field names, comma separated).
 SUMMARY_LABEL = ",".join(SUMMARY_FIELDS)
+#: Names (= order) of the values in ``twin/flow_residual``; the unit is the name's suffix
+#: (``m3s`` = m³/s, efficiencies [-]): measured, predicted and measured − predicted revolution-mean
+#: delivery flow, then the same for the volumetric efficiency.
+RESIDUAL_FIELDS = ("measured_delivery_m3s", "predicted_delivery_m3s", "delivery_residual_m3s",
+                   "measured_volumetric_efficiency", "predicted_volumetric_efficiency",
+                   "volumetric_efficiency_residual")
+#: One std_msgs/Float64 topic per residual value: ``twin/flow_residual/<field>``.
+RESIDUAL_VALUE_TOPICS = tuple(f"{FLOW_RESIDUAL}/{f}" for f in RESIDUAL_FIELDS)
+OUTPUT_TOPICS.update({t: m.FLOAT64 for t in RESIDUAL_VALUE_TOPICS})
+#: The per-value Float64 topics that repeat a labelled message (logged only with ``log_summary_values``).
+VALUE_TOPICS = frozenset(SUMMARY_VALUE_TOPICS + RESIDUAL_VALUE_TOPICS)
+
+
+@functools.lru_cache(maxsize=64)
+def chamber_names(n: int) -> tuple[str, ...]:
+    """Stable names of the ``n`` chambers: ``chamber_01`` ... (index k of a chamber array = ``chamber_{k+1}``).
+
+    Zero-padded to two digits (three from 100 chambers), so the names sort in chamber order.
+    """
+    width = max(2, len(str(n)))
+    return tuple(f"chamber_{k + 1:0{width}d}" for k in range(n))
+
+
+@functools.lru_cache(maxsize=64)
+def chamber_pressure_topics(n: int) -> tuple[str, ...]:
+    """``twin/chambers/<chamber>/pressure`` for each of the ``n`` chambers, in chamber order."""
+    return tuple(f"{CHAMBERS}/{name}/pressure" for name in chamber_names(n))
+
+
+def output_topics(n_chambers: int) -> dict[str, str]:
+    """Topic -> message type of every output of a twin of a pump with ``n_chambers`` chambers.
+
+    :data:`OUTPUT_TOPICS` and the per-chamber ``twin/chambers/<chamber>/pressure`` topics.
+    """
+    return {**OUTPUT_TOPICS, **{t: m.FLUID_PRESSURE for t in chamber_pressure_topics(n_chambers)}}
+
+
+def is_instant(topic: str) -> bool:
+    """Whether ``topic`` is published at ``publish_rate_hz`` (an instantaneous output)."""
+    return topic in INSTANT_TOPICS or topic.startswith(CHAMBERS + "/")
 
 
 def log_topics(inputs: dict[str, str], names: dict[str, str] | None = None,
-               logged: Callable[[str], bool] = lambda topic: True) -> list[tuple[str, str, str]]:
+               logged: Callable[[str], bool] = lambda topic: True,
+               outputs: dict[str, str] | None = None) -> list[tuple[str, str, str]]:
     """The channels of a twin log, the node's and run-bag's alike: ``(topic, msgtype, qos)``.
 
     Parameters
@@ -90,10 +149,12 @@ def log_topics(inputs: dict[str, str], names: dict[str, str] | None = None,
         Relative output name -> fully qualified (remapped) topic; default ``"/" + name``.
     logged : callable
         Which outputs have a channel (the node's log policy); ``/diagnostics`` always.
+    outputs : dict, optional
+        Output topic -> message type (:func:`output_topics` of the pump); default :data:`OUTPUT_TOPICS`.
     """
     names = names or {}
     out = [(t, mt, "sensor") for t, mt in inputs.items()]
-    out += [(names.get(t, "/" + t), mt, "reliable") for t, mt in OUTPUT_TOPICS.items() if logged(t)]
+    out += [(names.get(t, "/" + t), mt, "reliable") for t, mt in (outputs or OUTPUT_TOPICS).items() if logged(t)]
     out.append((names.get(DIAGNOSTICS_TOPIC, DIAGNOSTICS_TOPIC), m.DIAGNOSTIC_ARRAY, "reliable"))
     return out
 
@@ -117,6 +178,17 @@ def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min, peaks) -
     ``pressures`` [Pa], ``flow`` [m³/s], ``ecc`` [m] at the instant; ``gaps_min`` [m] and ``peaks``
     [Pa] per chamber since the previous publication.
     """
+    return _arrays(stamp_ns, pressures, flow, ecc, gaps_min, peaks) + chamber_messages(stamp_ns, pressures)
+
+
+def chamber_messages(stamp_ns: int, pressures) -> list[OutputMessage]:
+    """``twin/chambers/<chamber>/pressure`` (sensor_msgs/FluidPressure [Pa]) of each chamber at one instant."""
+    return [OutputMessage(topic, m.FLUID_PRESSURE, stamp_ns, m.fluid_pressure(stamp_ns, p, frame_id=m.PUMP_FRAME))
+            for topic, p in zip(chamber_pressure_topics(len(pressures)), pressures)]
+
+
+def _arrays(stamp_ns: int, pressures, flow: float, ecc, gaps_min, peaks) -> list[OutputMessage]:
+    """The array, flow and eccentricity topics at one instant."""
     return [
         OutputMessage(CHAMBER_PRESSURES, m.FLOAT64_MULTIARRAY, stamp_ns,
                       m.float64_multiarray(pressures, ("chamber",))),
@@ -145,3 +217,12 @@ def waveform(stamp_ns: int, table) -> OutputMessage:
     """``twin/chamber_waveform`` from a (samples, 1 + N) table."""
     return OutputMessage(CHAMBER_WAVEFORM, m.FLOAT64_MULTIARRAY, stamp_ns,
                          m.float64_multiarray(table, ("sample", "angle_p")))
+
+
+def residual_messages(stamp_ns: int, values) -> list[OutputMessage]:
+    """``twin/flow_residual`` (sensor_msgs/JointState, names :data:`RESIDUAL_FIELDS`, values in ``position``)
+    and one ``twin/flow_residual/<field>`` Float64 per value."""
+    msg = m.joint_state(stamp_ns, name=RESIDUAL_FIELDS, position=values, frame_id=m.PUMP_FRAME)
+    return [OutputMessage(FLOW_RESIDUAL, m.JOINT_STATE, stamp_ns, msg)] + [
+        OutputMessage(topic, m.FLOAT64, stamp_ns, m.float64(float(v)))
+        for topic, v in zip(RESIDUAL_VALUE_TOPICS, values)]
