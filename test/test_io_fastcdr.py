@@ -94,6 +94,12 @@ def test_every_fast_decoder_is_covered():
     (m.VECTOR3_STAMPED, m.vector3_stamped(5, 1.0, 2.0, 3.0, frame_id="")),
     (m.FLUID_PRESSURE, m.fluid_pressure(1_700_000_000_123_456_789, 2.101325e6, frame_id="pump_housing")),
     (m.FLUID_PRESSURE, m.fluid_pressure(5, 101325.0, variance=4.0e6, frame_id="")),
+    (m.JOINT_STATE, m.joint_state(5, name=["a", "chamber_01_peak_pressure_pa"], position=[1.5, 2e6],
+                                  frame_id="pump_housing")),
+    (m.JOINT_STATE, m.joint_state(1_700_000_000_123_456_789, name=["abc"], position=[1.0], velocity=[2.0],
+                                  effort=[3.0], frame_id="xy")),
+    (m.JOINT_STATE, m.joint_state(7, name=["ab", "cde", "f"], position=np.arange(3.0), frame_id="")),
+    (m.JOINT_STATE, m.joint_state(7, frame_id="p")),
     (m.FLOAT64_MULTIARRAY, m.float64_multiarray(np.arange(7.0), ("chamber",))),
     (m.FLOAT64_MULTIARRAY, m.float64_multiarray(np.arange(7.0) + 0.5, ("chamber",))),   # cached layout, new data
     (m.FLOAT64_MULTIARRAY, m.float64_multiarray(np.random.default_rng(1).random((360, 8)), ("sample", "angle_p"))),

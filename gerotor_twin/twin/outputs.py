@@ -37,6 +37,13 @@ pressure``                                                   :func:`chamber_name
                                                              stamp = the revolution's end (model time);
                                                              :mod:`gerotor_twin.twin.residual`
 ``twin/flow_residual/<name>`` std_msgs/Float64               the same values, one topic each
+``twin/sample``             sensor_msgs/JointState           at each publication: the instantaneous
+                                                             scalar and per-chamber values by name
+                                                             (:func:`sample_names`), header stamp = model
+                                                             time of the sample
+``twin/revolution``         sensor_msgs/JointState           once per revolution: the ``twin/flow_summary``
+                                                             values by name (:data:`SUMMARY_FIELDS`),
+                                                             header stamp = the revolution's end
 ==========================  ===============================  ==========================================
 
 An :class:`OutputMessage` is ``(topic, msgtype, stamp_ns, msg)``; ``msg`` is a
@@ -58,7 +65,7 @@ from gerotor_twin.io import messages as m
 __all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
            "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "RESIDUAL_FIELDS", "RESIDUAL_VALUE_TOPICS", "VALUE_TOPICS",
            "summary_messages", "residual_messages", "log_topics", "output_topics", "chamber_names",
-           "chamber_pressure_topics", "is_instant", "all_finite"]
+           "chamber_pressure_topics", "sample_names", "is_instant", "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
 DELIVERY_FLOW = "twin/delivery_flow"
@@ -68,6 +75,8 @@ TOOTH_GAPS = "twin/tooth_gaps"
 CHAMBER_PEAKS = "twin/chamber_peak_pressures"
 CHAMBER_WAVEFORM = "twin/chamber_waveform"
 FLOW_RESIDUAL = "twin/flow_residual"
+SAMPLE = "twin/sample"          #: stamped, named companion of the instantaneous scalar and per-chamber outputs
+REVOLUTION = "twin/revolution"  #: stamped, named companion of ``twin/flow_summary``
 CHAMBERS = "twin/chambers"      #: prefix of the per-chamber topics ``twin/chambers/<chamber>/pressure``
 HEALTH = "twin/health"          #: health estimate, once per settled interval (:mod:`gerotor_twin.twin.health`)
 DIAGNOSTICS_TOPIC = "/diagnostics"
@@ -83,10 +92,12 @@ OUTPUT_TOPICS: dict[str, str] = {
     CHAMBER_WAVEFORM: m.FLOAT64_MULTIARRAY,
     HEALTH: m.FLOAT64_MULTIARRAY,
     FLOW_RESIDUAL: m.JOINT_STATE,
+    SAMPLE: m.JOINT_STATE,
+    REVOLUTION: m.JOINT_STATE,
 }
 
-#: The outputs published at ``publish_rate_hz`` (instantaneous values).
-INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS, CHAMBER_PEAKS)
+#: The outputs published at ``publish_rate_hz`` (instantaneous values; also the per-chamber topics).
+INSTANT_TOPICS = (CHAMBER_PRESSURES, DELIVERY_FLOW, ECCENTRICITY, TOOTH_GAPS, CHAMBER_PEAKS, SAMPLE)
 #: Order of the values in ``twin/flow_summary``.
 SUMMARY_FIELDS = ("mean_delivery_m3s", "theoretical_m3s", "leakage_m3s", "volumetric_efficiency")
 #: One std_msgs/Float64 topic per summary value: ``twin/flow_summary/<field>``.
@@ -115,6 +126,20 @@ def chamber_names(n: int) -> tuple[str, ...]:
     """
     width = max(2, len(str(n)))
     return tuple(f"chamber_{k + 1:0{width}d}" for k in range(n))
+
+
+@functools.lru_cache(maxsize=64)
+def sample_names(n: int) -> tuple[str, ...]:
+    """Names of the ``twin/sample`` values of a pump with ``n`` chambers (unit = the name's suffix).
+
+    ``delivery_flow_m3s``, ``eccentricity_x_m``, ``eccentricity_y_m``, then per chamber
+    ``<chamber>_peak_pressure_pa`` (``twin/chamber_peak_pressures``), then per tooth-tip gap
+    ``tooth_gap_<k>_min_m`` (``twin/tooth_gaps``), k numbered like the chambers.
+    """
+    names = chamber_names(n)
+    return (("delivery_flow_m3s", "eccentricity_x_m", "eccentricity_y_m")
+            + tuple(f"{c}_peak_pressure_pa" for c in names)
+            + tuple(f"tooth_gap_{c[len('chamber_'):]}_min_m" for c in names))
 
 
 @functools.lru_cache(maxsize=64)
@@ -178,7 +203,10 @@ def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min, peaks) -
     ``pressures`` [Pa], ``flow`` [m³/s], ``ecc`` [m] at the instant; ``gaps_min`` [m] and ``peaks``
     [Pa] per chamber since the previous publication.
     """
-    return _arrays(stamp_ns, pressures, flow, ecc, gaps_min, peaks) + chamber_messages(stamp_ns, pressures)
+    values = np.concatenate(([flow, ecc[0], ecc[1]], peaks, gaps_min))
+    sample = m.joint_state(stamp_ns, name=sample_names(len(pressures)), position=values, frame_id=m.PUMP_FRAME)
+    return (_arrays(stamp_ns, pressures, flow, ecc, gaps_min, peaks) + chamber_messages(stamp_ns, pressures)
+            + [OutputMessage(SAMPLE, m.JOINT_STATE, stamp_ns, sample)])
 
 
 def chamber_messages(stamp_ns: int, pressures) -> list[OutputMessage]:
@@ -207,8 +235,10 @@ def summary(stamp_ns: int, values) -> OutputMessage:
 
 
 def summary_messages(stamp_ns: int, values) -> list[OutputMessage]:
-    """``twin/flow_summary`` and one ``twin/flow_summary/<field>`` Float64 per value."""
-    return [summary(stamp_ns, values)] + [
+    """``twin/flow_summary``, its stamped companion ``twin/revolution`` (sensor_msgs/JointState, names
+    :data:`SUMMARY_FIELDS`) and one ``twin/flow_summary/<field>`` Float64 per value."""
+    named = m.joint_state(stamp_ns, name=SUMMARY_FIELDS, position=values, frame_id=m.PUMP_FRAME)
+    return [summary(stamp_ns, values), OutputMessage(REVOLUTION, m.JOINT_STATE, stamp_ns, named)] + [
         OutputMessage(topic, m.FLOAT64, stamp_ns, m.float64(float(v)))
         for topic, v in zip(SUMMARY_VALUE_TOPICS, values)]
 

@@ -1,4 +1,5 @@
-"""Named, stamped outputs of the core: per-chamber pressures and the live flow residual (no DDS)."""
+"""Named, stamped outputs of the core: per-chamber pressures, twin/sample, twin/revolution and the live
+flow residual (no DDS)."""
 import math
 
 import numpy as np
@@ -8,7 +9,8 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
 from gerotor_twin.io.decode import decode
 from gerotor_twin.twin import TwinCore, TwinSettings
-from gerotor_twin.twin.outputs import RESIDUAL_FIELDS, chamber_names, chamber_pressure_topics, output_topics
+from gerotor_twin.twin.outputs import (RESIDUAL_FIELDS, SUMMARY_FIELDS, chamber_names, chamber_pressure_topics,
+                                       output_topics, sample_names)
 from gerotor_twin.twin.residual import FlowSamples
 
 MS = 1_000_000
@@ -70,6 +72,42 @@ def test_each_chamber_on_its_own_stamped_topic(model, with_meter):
         assert back.fluid_pressure == arrays[-1].msg["data"][k]
         assert m.ns_from_stamp(back.header.stamp) == arrays[-1].stamp_ns
     assert not of(msgs, f"twin/chambers/chamber_{model.N + 1:02d}/pressure")
+
+
+def test_sample_names_every_instantaneous_value_with_the_arrays_stamp(model, with_meter):
+    """twin/sample: flow, eccentricity, per-chamber peaks and gaps by name, equal to the unstamped topics."""
+    _core, msgs = with_meter
+    names = sample_names(model.N)
+    assert names[:3] == ("delivery_flow_m3s", "eccentricity_x_m", "eccentricity_y_m")
+    assert names[3] == "chamber_01_peak_pressure_pa" and names[-1] == f"tooth_gap_{model.N:02d}_min_m"
+    assert len(set(names)) == 3 + 2 * model.N
+    by_stamp = {}
+    for o in msgs:
+        by_stamp.setdefault((o.topic, o.stamp_ns), o.msg)
+    samples = of(msgs, "twin/sample")
+    assert len(samples) == len(of(msgs, "twin/delivery_flow")) > 50
+    for o in samples:
+        js = o.msg
+        assert tuple(js["name"]) == names and js["header"]["stamp"] == m.stamp_from_ns(o.stamp_ns)
+        v = dict(zip(js["name"], js["position"]))
+        assert v["delivery_flow_m3s"] == by_stamp[("twin/delivery_flow", o.stamp_ns)]["data"]
+        ecc = by_stamp[("twin/eccentricity", o.stamp_ns)]["vector"]
+        assert (v["eccentricity_x_m"], v["eccentricity_y_m"]) == (ecc["x"], ecc["y"])
+        peaks = by_stamp[("twin/chamber_peak_pressures", o.stamp_ns)]["data"]
+        gaps = by_stamp[("twin/tooth_gaps", o.stamp_ns)]["data"]
+        assert [v[f"{c}_peak_pressure_pa"] for c in chamber_names(model.N)] == list(peaks)
+        assert [v[f"tooth_gap_{k:02d}_min_m"] for k in range(1, model.N + 1)] == list(gaps)
+    back = decode(m.JOINT_STATE, encode(m.JOINT_STATE, samples[-1].msg))
+    assert tuple(back.name) == names and list(back.position) == list(samples[-1].msg["position"])
+
+
+def test_revolution_is_the_stamped_flow_summary(with_meter):
+    _core, msgs = with_meter
+    sums, revs = of(msgs, "twin/flow_summary"), of(msgs, "twin/revolution")
+    assert len(revs) == len(sums) >= 8
+    for s, r in zip(sums, revs):
+        assert r.stamp_ns == s.stamp_ns and r.msg["header"]["stamp"] == m.stamp_from_ns(s.stamp_ns)
+        assert tuple(r.msg["name"]) == SUMMARY_FIELDS and list(r.msg["position"]) == list(s.msg["data"])
 
 
 def test_residual_each_revolution_against_its_summary(model, with_meter):
