@@ -50,7 +50,7 @@ def test_named_stamped_outputs_and_residual_live_and_logged(tmp_path):
     residual is absent and /diagnostics says so; with one it is published per revolution; all in the log."""
     from rosbags.highlevel import AnyReader
     d = claim_domain()
-    proc = start_node(d, tmp_path, "log_outputs_every:=1")
+    proc = start_node(d, tmp_path, "log_outputs_every:=1", "log_summary_values:=true")
     peer = Peer(d, outputs=output_topics(N))
     try:
         peer.wait_matched(proc=proc)

@@ -114,8 +114,9 @@ RESIDUAL_FIELDS = ("measured_delivery_m3s", "predicted_delivery_m3s", "delivery_
 #: One std_msgs/Float64 topic per residual value: ``twin/flow_residual/<field>``.
 RESIDUAL_VALUE_TOPICS = tuple(f"{FLOW_RESIDUAL}/{f}" for f in RESIDUAL_FIELDS)
 OUTPUT_TOPICS.update({t: m.FLOAT64 for t in RESIDUAL_VALUE_TOPICS})
-#: The per-value Float64 topics that repeat a labelled message (logged only with ``log_summary_values``).
-VALUE_TOPICS = frozenset(SUMMARY_VALUE_TOPICS + RESIDUAL_VALUE_TOPICS)
+#: The topics that repeat another output's values at its log time (logged only with ``log_summary_values``):
+#: the per-value Float64 topics and ``twin/revolution`` (= ``twin/flow_summary``, which is always logged).
+VALUE_TOPICS = frozenset(SUMMARY_VALUE_TOPICS + RESIDUAL_VALUE_TOPICS + (REVOLUTION,))
 
 
 @functools.lru_cache(maxsize=64)
