@@ -39,9 +39,11 @@ Input sampling (deterministic)
     they lag the clock by less than one cell.  The shaft angle is integrated
     from the speed; the advance is also split at every whole revolution.
 Outputs
-    At every ``publish_period_s`` multiple of model time: chamber pressures,
-    delivery flow, eccentricity (values at that instant) and the per-gap
-    minimum tooth-tip gaps since the previous publication.  At each completed
+    At every ``publish_period_s`` multiple of model time: chamber pressures
+    (as an array and one ``twin/chambers/<chamber>/pressure`` per chamber),
+    delivery flow, eccentricity (values at that instant), the per-gap
+    minimum tooth-tip gaps and per-chamber peak pressures since the previous
+    publication, and ``twin/sample`` (all of them by name, stamped).  At each completed
     revolution: ``twin/flow_summary`` (mean delivery over the revolution from
     the exact delivered volume, theoretical = displacement / revolution time,
     leakage = their difference, volumetric efficiency) and every
