@@ -181,6 +181,15 @@ def test_no_flow_meter_no_residual_and_diagnostics_say_so(model):
     assert kv["flow_residual_published"] == "0"
 
 
+def test_bag_loop_residual_uses_only_the_new_pass(model):
+    """After the clock jumps back (a bag loop), the meter's samples of the first pass are not averaged in."""
+    core = TwinCore(model, TwinSettings(max_span_s=math.inf))
+    run(core, 0, 300, flow=5.0e-4)
+    msgs = run(core, 0, 300, flow=4.0e-4)        # same clock times again, another reading
+    res = of(msgs, "twin/flow_residual")
+    assert len(res) >= 5 and all(o.msg["position"][0] == pytest.approx(4.0e-4, rel=1e-12) for o in res)
+
+
 def test_flow_samples_window_and_pruning():
     s = FlowSamples()
     for t, v in ((10, 1.0), (20, 2.0), (30, float("nan")), (40, 4.0)):
@@ -188,5 +197,7 @@ def test_flow_samples_window_and_pruning():
     assert s.between(10, 40) == [1.0, 2.0] and s.last_before(40) == (20, 2.0) and s.last_before(10) is None
     s.drop_before(40, keep_last=True)
     assert s.between(0, 100) == [2.0, 4.0]
+    s.forget_after(30)
+    assert s.between(0, 100) == [2.0]
     s.drop_before(100)
     assert s.between(0, 1000) == [] and s.last_before(1000) is None

@@ -155,6 +155,7 @@ class TwinCore:
         self.health = HealthMonitor(model, health or HealthSettings())
         #: measured against predicted revolution-mean flow (``twin/flow_residual``)
         self.residual = FlowResidual(model.displacement, s.stale_timeout_s)
+        self._last_now: int | None = None
         #: result of :meth:`measure_startup_rtf` (None: not measured)
         self.startup_rtf: StartupRtf | None = None
 
@@ -248,6 +249,10 @@ class TwinCore:
         """
         t0 = self._timer()
         now_ns = int(now_ns)
+        if self._last_now is not None and now_ns < self._last_now:     # bag loop: the driver resets the model
+            self.residual.clock_jumped_back(now_ns)
+            self.health.clock_jumped_back(now_ns)
+        self._last_now = now_ns
         res = TickResult(now_ns, self.driver.t_ns)
         self.driver.tick(now_ns, res)
         res.messages.extend(self.residual.observe(res.messages))

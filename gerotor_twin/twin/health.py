@@ -190,6 +190,10 @@ class HealthMonitor:
         """A measured delivery flow sample [m³/s] (accepted by the input book)."""
         self._flow.add(value_m3s, receive_ns)
 
+    def clock_jumped_back(self, now_ns: int) -> None:
+        """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
+        self._flow.forget_after(now_ns)
+
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
         if not self.settings.enabled:

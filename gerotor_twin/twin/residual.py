@@ -62,6 +62,12 @@ class FlowSamples:
                 return t, v
         return None
 
+    def forget_after(self, t_ns: int) -> None:
+        """Forget the samples received after ``t_ns`` (the clock jumped back to it: a bag loop)."""
+        kept = [x for x in list(self._q) if x[0] <= t_ns]
+        self._q.clear()
+        self._q.extend(kept)
+
     def drop_before(self, t_ns: int, keep_last: bool = False) -> None:
         """Forget the samples received before ``t_ns`` (with ``keep_last``: all but the last of them)."""
         q = self._q
@@ -94,6 +100,10 @@ class FlowResidual:
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
         """A measured delivery flow sample [m³/s] accepted by the input book, received at ``receive_ns`` [ns]."""
         self.samples.add(value_m3s, receive_ns)
+
+    def clock_jumped_back(self, now_ns: int) -> None:
+        """The clock went back to ``now_ns`` [ns]: samples received after it belong to another pass."""
+        self.samples.forget_after(now_ns)
 
     def observe(self, messages) -> list[OutputMessage]:
         """The ``twin/flow_residual`` messages for the revolution summaries among ``messages``."""
