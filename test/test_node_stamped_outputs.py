@@ -57,7 +57,8 @@ def test_named_stamped_outputs_and_residual_live_and_logged(tmp_path):
         _bench(peer, proc, lambda: len(peer.get("twin/revolution")) >= 5 and peer.get("/diagnostics"))
         _bench(peer, proc, lambda: "flow_residual" in latest_diag(peer, "gerotor_twin: model"))
         before = latest_diag(peer, "gerotor_twin: model")
-        assert before["flow_residual"].startswith("not published: no measured delivery flow"), before
+        assert before["flow_residual"].startswith(
+            "not published: no measured delivery flow received on bench/delivery_flow"), before
         assert peer.get("twin/flow_residual") == []
         peer.wait_matched(("delivery_flow",), proc=proc)
         _bench(peer, proc, lambda: len(peer.get("twin/flow_residual")) >= 10, flow=Q_METER)

@@ -177,8 +177,11 @@ def test_no_flow_meter_no_residual_and_diagnostics_say_so(model):
     diag = core.diagnostics(300 * MS)
     model_st = next(s for s in diag["status"] if s["name"] == "gerotor_twin: model")
     kv = {x["key"]: x["value"] for x in model_st["values"]}
-    assert kv["flow_residual"].startswith("not published: no measured delivery flow")
+    assert kv["flow_residual"] == ("not published: no measured delivery flow received on bench/delivery_flow; "
+                                   "it is published once a flow meter's samples arrive")
     assert kv["flow_residual_published"] == "0"
+    core.residual.meter_topic = ""                  # the node without a flow-meter input
+    assert core.residual.report()["flow_residual"].endswith("no flow-meter input (delivery_flow_topic is '')")
 
 
 def test_bag_loop_residual_uses_only_the_new_pass(model):

@@ -96,6 +96,9 @@ class FlowResidual:
         self.held = 0               #: of which with a held sample (none received in the revolution) [-]
         self.without_flow = 0       #: revolutions without a usable measured flow [-]
         self.last: tuple | None = None   #: last published values (:data:`~.outputs.RESIDUAL_FIELDS` order)
+        #: where the measured flow comes from, for the status text (the node sets its ``delivery_flow_topic``;
+        #: '' = no flow-meter input)
+        self.meter_topic = "bench/delivery_flow"
 
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
         """A measured delivery flow sample [m³/s] accepted by the input book, received at ``receive_ns`` [ns]."""
@@ -147,8 +150,10 @@ class FlowResidual:
         """Values for the ``gerotor_twin: model`` status: state text and counters."""
         if self.published:
             text = f"published ({self.published} revolutions)"
+        elif not self.meter_topic:
+            text = "not published: no measured delivery flow: no flow-meter input (delivery_flow_topic is '')"
         else:
-            text = ("not published: no measured delivery flow (bench/delivery_flow) received; "
+            text = (f"not published: no measured delivery flow received on {self.meter_topic}; "
                     "it is published once a flow meter's samples arrive")
         vals = {"flow_residual": text, "flow_residual_published": self.published,
                 "flow_residual_held_sample": self.held, "flow_residual_without_flow": self.without_flow}
