@@ -115,7 +115,7 @@ PARAMETERS: tuple[Param, ...] = (
     Param("log_summary_values", False, "also log the topics that repeat another logged output: "
                                        "twin/flow_summary/<name> and twin/flow_residual/<name> (Float64), "
                                        "twin/revolution (= twin/flow_summary, which the shipped layouts label "
-                                       "by name) [-]"),
+                                       "by name), twin/health_update (= twin/health) [-]"),
     Param("log_waveform_every", 500, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
     Param("log_outputs_every", 10, "log every N-th publication of chamber pressures (array and per "
                                   "chamber), delivery flow, eccentricity, tooth gaps, chamber peaks, twin/sample "

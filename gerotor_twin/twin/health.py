@@ -23,7 +23,8 @@ When it is updated (robust to ramps and to the flow meter's lag)
     the efficiency RMSE the calibration measured (``calibration.residuals.eta_rmse`` of a
     config written by ``gerotor-twin calibrate``; 0 for an uncalibrated config): the twin is
     not trusted more closely than its calibration showed it fits the pump.
-What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
+What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`; the same by name,
+stamped, on ``twin/health_update``)
     k and its standard deviation, the clearance factor k^(1/n), the volumetric
     efficiency at the reference point (``reference_rpm``, ``reference_bar``, each capped at the
     pump's ``range``) with k
@@ -52,7 +53,7 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, OutputMessage
+from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse"]
@@ -249,7 +250,8 @@ class HealthMonitor:
         values = self.values()
         self.history.append({"t_ns": end_ns, **dict(zip(HEALTH_FIELDS, values))})
         return [OutputMessage(HEALTH_TOPIC, m.FLOAT64_MULTIARRAY, end_ns,
-                              m.float64_multiarray(values, (",".join(HEALTH_FIELDS),)))]
+                              m.float64_multiarray(values, (",".join(HEALTH_FIELDS),))),
+                named_values(HEALTH_UPDATE, end_ns, HEALTH_FIELDS, values)]
 
     def _adapt(self, k: float) -> None:
         from gerotor_twin.model.clearance_scale import scale_clearances

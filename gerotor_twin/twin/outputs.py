@@ -44,6 +44,8 @@ pressure``                                                   :func:`chamber_name
 ``twin/revolution``         sensor_msgs/JointState           once per revolution: the ``twin/flow_summary``
                                                              values by name (:data:`SUMMARY_FIELDS`),
                                                              header stamp = the revolution's end
+``twin/health_update``      sensor_msgs/JointState           the ``twin/health`` values by name, header
+                                                             stamp = the end of the estimator's interval
 ==========================  ===============================  ==========================================
 
 An :class:`OutputMessage` is ``(topic, msgtype, stamp_ns, msg)``; ``msg`` is a
@@ -64,7 +66,7 @@ from gerotor_twin.io import messages as m
 
 __all__ = ["OutputMessage", "OUTPUT_TOPICS", "SUMMARY_FIELDS", "SUMMARY_LABEL", "SUMMARY_VALUE_TOPICS",
            "INSTANT_TOPICS", "DIAGNOSTICS_TOPIC", "RESIDUAL_FIELDS", "RESIDUAL_VALUE_TOPICS", "VALUE_TOPICS",
-           "summary_messages", "residual_messages", "log_topics", "output_topics", "chamber_names",
+           "summary_messages", "residual_messages", "named_values", "log_topics", "output_topics", "chamber_names",
            "chamber_pressure_topics", "sample_names", "is_instant", "all_finite"]
 
 CHAMBER_PRESSURES = "twin/chamber_pressures"
@@ -77,6 +79,7 @@ CHAMBER_WAVEFORM = "twin/chamber_waveform"
 FLOW_RESIDUAL = "twin/flow_residual"
 SAMPLE = "twin/sample"          #: stamped, named companion of the instantaneous scalar and per-chamber outputs
 REVOLUTION = "twin/revolution"  #: stamped, named companion of ``twin/flow_summary``
+HEALTH_UPDATE = "twin/health_update"   #: stamped, named companion of ``twin/health``
 CHAMBERS = "twin/chambers"      #: prefix of the per-chamber topics ``twin/chambers/<chamber>/pressure``
 HEALTH = "twin/health"          #: health estimate, once per settled interval (:mod:`gerotor_twin.twin.health`)
 DIAGNOSTICS_TOPIC = "/diagnostics"
@@ -94,6 +97,7 @@ OUTPUT_TOPICS: dict[str, str] = {
     FLOW_RESIDUAL: m.JOINT_STATE,
     SAMPLE: m.JOINT_STATE,
     REVOLUTION: m.JOINT_STATE,
+    HEALTH_UPDATE: m.JOINT_STATE,
 }
 
 #: The outputs published at ``publish_rate_hz`` (instantaneous values; also the per-chamber topics).
@@ -115,8 +119,9 @@ RESIDUAL_FIELDS = ("measured_delivery_m3s", "predicted_delivery_m3s", "delivery_
 RESIDUAL_VALUE_TOPICS = tuple(f"{FLOW_RESIDUAL}/{f}" for f in RESIDUAL_FIELDS)
 OUTPUT_TOPICS.update({t: m.FLOAT64 for t in RESIDUAL_VALUE_TOPICS})
 #: The topics that repeat another output's values at its log time (logged only with ``log_summary_values``):
-#: the per-value Float64 topics and ``twin/revolution`` (= ``twin/flow_summary``, which is always logged).
-VALUE_TOPICS = frozenset(SUMMARY_VALUE_TOPICS + RESIDUAL_VALUE_TOPICS + (REVOLUTION,))
+#: the per-value Float64 topics, ``twin/revolution`` (= ``twin/flow_summary``) and ``twin/health_update``
+#: (= ``twin/health``), whose originals are always logged.
+VALUE_TOPICS = frozenset(SUMMARY_VALUE_TOPICS + RESIDUAL_VALUE_TOPICS + (REVOLUTION, HEALTH_UPDATE))
 
 
 @functools.lru_cache(maxsize=64)
@@ -205,9 +210,19 @@ def instantaneous(stamp_ns: int, pressures, flow: float, ecc, gaps_min, peaks) -
     [Pa] per chamber since the previous publication.
     """
     values = np.concatenate(([flow, ecc[0], ecc[1]], peaks, gaps_min))
-    sample = m.joint_state(stamp_ns, name=sample_names(len(pressures)), position=values, frame_id=m.PUMP_FRAME)
     return (_arrays(stamp_ns, pressures, flow, ecc, gaps_min, peaks) + chamber_messages(stamp_ns, pressures)
-            + [OutputMessage(SAMPLE, m.JOINT_STATE, stamp_ns, sample)])
+            + [named_values(SAMPLE, stamp_ns, sample_names(len(pressures)), values)])
+
+
+def named_values(topic: str, stamp_ns: int, names, values) -> OutputMessage:
+    """A stamped, named record: sensor_msgs/JointState with ``name`` = ``names`` and ``position`` = ``values``.
+
+    The form of every named companion (``twin/sample``, ``twin/revolution``, ``twin/flow_residual``,
+    ``twin/health_update``): header stamp = ``stamp_ns`` [ns], frame ``pump_housing``; ``velocity`` and
+    ``effort`` empty; each value in the unit its name ends with.
+    """
+    return OutputMessage(topic, m.JOINT_STATE, stamp_ns,
+                         m.joint_state(stamp_ns, name=names, position=values, frame_id=m.PUMP_FRAME))
 
 
 def chamber_messages(stamp_ns: int, pressures) -> list[OutputMessage]:
@@ -238,8 +253,7 @@ def summary(stamp_ns: int, values) -> OutputMessage:
 def summary_messages(stamp_ns: int, values) -> list[OutputMessage]:
     """``twin/flow_summary``, its stamped companion ``twin/revolution`` (sensor_msgs/JointState, names
     :data:`SUMMARY_FIELDS`) and one ``twin/flow_summary/<field>`` Float64 per value."""
-    named = m.joint_state(stamp_ns, name=SUMMARY_FIELDS, position=values, frame_id=m.PUMP_FRAME)
-    return [summary(stamp_ns, values), OutputMessage(REVOLUTION, m.JOINT_STATE, stamp_ns, named)] + [
+    return [summary(stamp_ns, values), named_values(REVOLUTION, stamp_ns, SUMMARY_FIELDS, values)] + [
         OutputMessage(topic, m.FLOAT64, stamp_ns, m.float64(float(v)))
         for topic, v in zip(SUMMARY_VALUE_TOPICS, values)]
 
@@ -253,7 +267,6 @@ def waveform(stamp_ns: int, table) -> OutputMessage:
 def residual_messages(stamp_ns: int, values) -> list[OutputMessage]:
     """``twin/flow_residual`` (sensor_msgs/JointState, names :data:`RESIDUAL_FIELDS`, values in ``position``)
     and one ``twin/flow_residual/<field>`` Float64 per value."""
-    msg = m.joint_state(stamp_ns, name=RESIDUAL_FIELDS, position=values, frame_id=m.PUMP_FRAME)
-    return [OutputMessage(FLOW_RESIDUAL, m.JOINT_STATE, stamp_ns, msg)] + [
+    return [named_values(FLOW_RESIDUAL, stamp_ns, RESIDUAL_FIELDS, values)] + [
         OutputMessage(topic, m.FLOAT64, stamp_ns, m.float64(float(v)))
         for topic, v in zip(RESIDUAL_VALUE_TOPICS, values)]
