@@ -155,7 +155,7 @@ class TwinCore:
         self.health = HealthMonitor(model, health or HealthSettings())
         #: measured against predicted revolution-mean flow (``twin/flow_residual``)
         self.residual = FlowResidual(model.displacement, s.stale_timeout_s)
-        self._last_now: int | None = None
+        self.driver.jump_back_listeners += [self.residual.clock_jumped_back, self.health.clock_jumped_back]
         #: result of :meth:`measure_startup_rtf` (None: not measured)
         self.startup_rtf: StartupRtf | None = None
 
@@ -249,10 +249,6 @@ class TwinCore:
         """
         t0 = self._timer()
         now_ns = int(now_ns)
-        if self._last_now is not None and now_ns < self._last_now:     # bag loop: the driver resets the model
-            self.residual.clock_jumped_back(now_ns)
-            self.health.clock_jumped_back(now_ns)
-        self._last_now = now_ns
         res = TickResult(now_ns, self.driver.t_ns)
         self.driver.tick(now_ns, res)
         res.messages.extend(self.residual.observe(res.messages))
