@@ -68,7 +68,9 @@ def kill_node(proc: subprocess.Popen) -> None:
 class Peer:
     """Bench-side rclpy participant in its own context."""
 
-    def __init__(self, domain_id: int, clock: bool = False):
+    def __init__(self, domain_id: int, clock: bool = False, outputs: dict[str, str] | None = None):
+        """``outputs``: output topic -> type to record (default ``OUTPUT_TOPICS``; ``output_topics(N)`` adds
+        the per-chamber topics)."""
         self.ctx = rclpy.Context()
         rclpy.init(context=self.ctx, domain_id=domain_id)
         self.node = rclpy.create_node("bench_peer", context=self.ctx)
@@ -87,8 +89,9 @@ class Peer:
         self.pubs = {k: self.node.create_publisher(cls[s.msgtype], s.topic, sensor) for k, s in INPUTS.items()}
         self.clock_pub = self.node.create_publisher(Clock, "/clock", 10) if clock else None
         self.lock = threading.Lock()
-        self.received: dict[str, list] = {t: [] for t in [*OUTPUT_TOPICS, "/diagnostics"]}
-        types = dict(OUTPUT_TOPICS, **{"/diagnostics": m.DIAGNOSTIC_ARRAY})
+        outputs = outputs or OUTPUT_TOPICS
+        self.received: dict[str, list] = {t: [] for t in [*outputs, "/diagnostics"]}
+        types = dict(outputs, **{"/diagnostics": m.DIAGNOSTIC_ARRAY})
         for topic, mt in types.items():
             self.node.create_subscription(cls[mt], topic, self._cb(topic, mt), reliable, raw=True)
         self.sent: dict[str, list[int]] = {k: [] for k in INPUTS}

@@ -5,7 +5,8 @@ with the project's codec and decoded again: Foxglove message paths
 (``/topic.field[i].sub``) field by field; PlotJuggler series names as its ROS
 parser builds them (``/topic/field/sub``, arrays ``[i]``, JointState by joint
 name ``/topic/<joint>/velocity``; ros/PlotJuggler ParserROS).  The four
-flow-summary values are findable by name in both.  setup.py installs both files.
+flow-summary values are findable by name in both; every chamber of the packaged pump is plotted from
+its own named topic, and the flow residual from ``twin/flow_residual``.  setup.py installs both files.
 """
 from __future__ import annotations
 
@@ -20,11 +21,13 @@ import numpy as np
 from gerotor_twin.bench_emulator.emulator import SHAFT_JOINT
 from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
-from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, SUMMARY_FIELDS
+from gerotor_twin.twin import INPUTS, SUMMARY_FIELDS
 from gerotor_twin.io.decode import decode
+from gerotor_twin.twin.outputs import RESIDUAL_FIELDS, chamber_pressure_topics, output_topics, sample_names
 
 ROOT = Path(__file__).resolve().parent.parent
-TYPES = {"/" + t: mt for t, mt in OUTPUT_TOPICS.items()}
+N = 7                                  # chambers of the packaged pump (the layouts plot them all)
+TYPES = {"/" + t: mt for t, mt in output_topics(N).items()}
 TYPES.update({"/" + s.topic.lstrip("/"): s.msgtype for s in INPUTS.values()})
 TYPES["/diagnostics"] = m.DIAGNOSTIC_ARRAY
 SAMPLES = {
@@ -35,8 +38,14 @@ SAMPLES = {
 }
 
 
+#: The twin's JointState outputs, with their value names.
+NAMED = {"/twin/sample": sample_names(N), "/twin/revolution": SUMMARY_FIELDS, "/twin/flow_residual": RESIDUAL_FIELDS}
+
+
 def sample(topic: str):
     mt = TYPES[topic]
+    if topic in NAMED:
+        return decode(mt, encode(mt, m.joint_state(1, name=NAMED[topic], position=np.arange(len(NAMED[topic])) + 0.5)))
     msg = SAMPLES.get(mt) or m.float64_multiarray(np.zeros(7), ("chamber",))
     return decode(mt, encode(mt, msg))
 
@@ -78,6 +87,12 @@ def test_foxglove_layout():
         (label,) = [lab for lab in labels if lab.startswith(name)]
         assert (f"/twin/flow_summary.data[{k}]", label) in [
             (p["value"], p["label"]) for c in lay["configById"].values() for p in c.get("paths", ())]
+    plotted = {p["value"]: p for c in lay["configById"].values() for p in c.get("paths", ())}
+    for topic in chamber_pressure_topics(N):                  # each chamber by name, at its header stamp
+        assert plotted[f"/{topic}.fluid_pressure"]["timestampMethod"] == "headerStamp"
+    k = RESIDUAL_FIELDS.index("delivery_residual_m3s")
+    assert plotted[f"/twin/flow_residual.position[{k}]"]["label"].startswith("delivery_residual_m3s")
+    assert plotted[f"/twin/flow_residual.position[{k}]"]["timestampMethod"] == "headerStamp"
 
 
 def plotjuggler_names(topic: str) -> set[str]:
@@ -113,6 +128,8 @@ def test_plotjuggler_layout():
     assert curves and all(series(c) for c in curves), [c for c in curves if not series(c)]
     for k, name in enumerate(SUMMARY_FIELDS):
         assert snippets[f"flow_summary/{name}"].findtext("linked_source") == f"/twin/flow_summary/data[{k}]"
+    assert {f"/{t}/fluid_pressure" for t in chamber_pressure_topics(N)} <= set(curves)
+    assert "/twin/flow_residual/delivery_residual_m3s/position" in curves
     assert root.find("tabbed_widget/Tab/Container/DockSplitter") is not None
 
 

@@ -31,6 +31,15 @@ def test_decimation():
     assert not pol.due("twin/flow_summary/volumetric_efficiency")              # off by default
     assert policy(log_summary_values=True).due("twin/flow_summary/volumetric_efficiency")
     assert not policy(log_waveforms=False).due("twin/chamber_waveform")
+    # the named, stamped topics: per-chamber and twin/sample decimated like the arrays, the residual always,
+    # the repeats (twin/revolution = twin/flow_summary, twin/health_update = twin/health,
+    # twin/flow_residual/<name>) only with log_summary_values
+    for topic in ("twin/chambers/chamber_01/pressure", "twin/chambers/chamber_13/pressure", "twin/sample"):
+        assert [pol.due(topic) for _ in range(10)] == [True, False, False, False, False] * 2, topic
+    assert all(pol.due("twin/flow_residual") for _ in range(7))
+    for topic in ("twin/revolution", "twin/health_update", "twin/flow_residual/delivery_residual_m3s"):
+        assert not pol.logged(topic) and not pol.due(topic), topic
+        assert policy(log_summary_values=True).due(topic), topic
 
     def diag(level):
         return m.diagnostic_array(1, [m.diagnostic_status(0, "a"), m.diagnostic_status(level, "b")])

@@ -9,6 +9,7 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode
 from gerotor_twin.twin import OUTPUT_TOPICS, SUMMARY_LABEL, TwinCore, TwinSettings, sample_from_message
 from gerotor_twin.io.decode import decode
+from gerotor_twin.twin.outputs import output_topics
 
 MS = 1_000_000
 W = 2000 * math.pi / 30          # [rad/s]
@@ -112,8 +113,9 @@ def test_outputs_physical_and_encodable(model, steady_run):
     core, msgs = steady_run
     no_nan(msgs)
     c = model.config.clearances.housing_radial_m
+    topics = output_topics(model.N)
     for o in msgs:
-        assert o.msgtype == OUTPUT_TOPICS[o.topic]
+        assert o.msgtype == topics[o.topic]
         encode(o.msgtype, o.msg)        # field names and types right
     for o in of(msgs, "twin/eccentricity"):
         v = o.msg["vector"]

@@ -72,9 +72,13 @@ def test_tracks_leakage_factor_on_steady_operation(monitor):
     assert monitor.drop_pt() == pytest.approx(drop, abs=0.2)
     want = m.DIAG_ERROR if drop > 5 else m.DIAG_WARN if drop > 2 else m.DIAG_OK
     assert monitor.level() == want
-    msg = f.messages[-1]
+    msg, named = f.messages[-2:]
     assert msg.topic == HEALTH and msg.msg["layout"]["dim"][0]["label"] == ",".join(HEALTH_FIELDS)
     v = dict(zip(HEALTH_FIELDS, msg.msg["data"]))
+    # the same values by name, stamped with the end of the interval (twin/health_update)
+    assert named.topic == "twin/health_update" and named.stamp_ns == msg.stamp_ns
+    assert named.msg["header"]["stamp"] == m.stamp_from_ns(msg.stamp_ns)
+    assert dict(zip(named.msg["name"], named.msg["position"])) == v
     assert v["clearance_factor"] == pytest.approx(v["leakage_factor"] ** (1 / monitor.exponent))
     st = monitor.status()
     assert st["name"] == HEALTH_STATUS and st["level"] == want

@@ -2,8 +2,9 @@
 
 Encoding: std_msgs/Float64MultiArray (NumPy ``tobytes`` for the data; the
 generic encoder :func:`gerotor_twin.io.codec.encode` packs a 720 × 8 waveform
-in ~5 ms, this one in ~0.05 ms), std_msgs/Float64 and
-geometry_msgs/Vector3Stamped (~1 µs against 7–30 µs).
+in ~5 ms, this one in ~0.05 ms), std_msgs/Float64, geometry_msgs/Vector3Stamped
+and sensor_msgs/FluidPressure (~1 µs against 7–30 µs), sensor_msgs/JointState (the
+names' bytes cached per name list).
 
 Decoding: the bench inputs (sensor_msgs/JointState, FluidPressure,
 Temperature, std_msgs/Float64) and Vector3Stamped by ``struct`` at fixed
@@ -81,20 +82,67 @@ def encode_float64(msg: dict) -> bytes:
     return _LE + b"\x00\x00" + _F64.pack(float(msg["data"]))
 
 
-def encode_vector3_stamped(msg: dict) -> bytes:
-    """CDR bytes of a :func:`gerotor_twin.io.messages.vector3_stamped` dict."""
-    st, v = msg["header"]["stamp"], msg["vector"]
+def _encode_stamped(msg: dict, values: tuple) -> bytes:
+    """CDR bytes of a std_msgs/Header followed by float64 fields ``values`` (in order)."""
+    st = msg["header"]["stamp"]
     frame = str(msg["header"]["frame_id"]).encode("utf-8") + b"\x00"
     buf = bytearray(_LE + b"\x00\x00")
     buf += _V3S_HEAD.pack(int(st["sec"]), int(st["nanosec"]), len(frame)) + frame
     _pad(buf, 8)
-    buf += _3F64.pack(float(v["x"]), float(v["y"]), float(v["z"]))
+    buf += struct.pack(f"<{len(values)}d", *values)
+    return bytes(buf)
+
+
+def encode_vector3_stamped(msg: dict) -> bytes:
+    """CDR bytes of a :func:`gerotor_twin.io.messages.vector3_stamped` dict."""
+    v = msg["vector"]
+    return _encode_stamped(msg, (float(v["x"]), float(v["y"]), float(v["z"])))
+
+
+def encode_fluid_pressure(msg: dict) -> bytes:
+    """CDR bytes of a :func:`gerotor_twin.io.messages.fluid_pressure` dict (the per-chamber outputs)."""
+    return _encode_stamped(msg, (float(msg["fluid_pressure"]), float(msg["variance"])))
+
+
+@functools.lru_cache(maxsize=64)
+def _names(names: tuple, offset: int) -> bytes:
+    """The CDR string sequence ``names`` starting at ``offset`` bytes after the encapsulation header."""
+    buf = bytearray(b"\x00" * (4 + offset))
+    _pad(buf, 4)
+    buf += _U32.pack(len(names))
+    for name in names:
+        raw = name.encode("utf-8") + b"\x00"
+        _pad(buf, 4)
+        buf += _U32.pack(len(raw)) + raw
+    return bytes(buf[4 + offset:])
+
+
+def _put_doubles(buf: bytearray, values) -> None:
+    """Append a float64 sequence (count, then the values aligned to 8)."""
+    data = np.asarray(values, dtype="<f8").ravel()
+    _pad(buf, 4)
+    buf += _U32.pack(data.size)
+    if data.size:
+        _pad(buf, 8)
+        buf += data.tobytes()
+
+
+def encode_joint_state(msg: dict) -> bytes:
+    """CDR bytes of a :func:`gerotor_twin.io.messages.joint_state` dict (the named, stamped outputs)."""
+    st = msg["header"]["stamp"]
+    frame = str(msg["header"]["frame_id"]).encode("utf-8") + b"\x00"
+    buf = bytearray(_LE + b"\x00\x00")
+    buf += _V3S_HEAD.pack(int(st["sec"]), int(st["nanosec"]), len(frame)) + frame
+    buf += _names(tuple(msg["name"]), len(buf) - 4)
+    for key in ("position", "velocity", "effort"):
+        _put_doubles(buf, msg[key])
     return bytes(buf)
 
 
 _ENCODERS: dict[str, Callable[[dict], bytes]] = {
     m.FLOAT64_MULTIARRAY: encode_float64_multiarray, m.FLOAT64: encode_float64,
-    m.VECTOR3_STAMPED: encode_vector3_stamped}
+    m.VECTOR3_STAMPED: encode_vector3_stamped, m.FLUID_PRESSURE: encode_fluid_pressure,
+    m.JOINT_STATE: encode_joint_state}
 
 
 def encode(msgtype: str, msg: Any) -> bytes:

@@ -29,7 +29,7 @@ from gerotor_twin.io.mcap_log import twin_log_metadata
 from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
 from gerotor_twin.twin.core import TwinCore
 from gerotor_twin.twin.inputs import INPUTS
-from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics, output_topics
 from gerotor_twin.twin.settings import NS, TwinSettings, oil_sensor_tau_arg
 
 __all__ = ["run_bag", "RUN_BAG_METADATA"]
@@ -150,7 +150,8 @@ def run_bag(bag, output, *, model: str = "mobility", config_path=None, settings:
               **{f"health_{k}": repr(v) for k, v in core.health.settings.as_dict().items()}}
     log = McapLog(output, overwrite=overwrite, metadata=twin_log_metadata(
         cfg_text, str(cfg.source), params, {RUN_BAG_METADATA: {"model": model, "bag": str(f.path)}}))
-    for topic, msgtype, qos in log_topics({name: f.topic_types()[name] for name in kinds}):
+    for topic, msgtype, qos in log_topics({name: f.topic_types()[name] for name in kinds},
+                                          outputs=output_topics(core.N)):
         log.add_topic(topic, msgtype, qos=qos)
     t_first, t_last = rows[0][0], rows[-1][0]
     wall0, shown = time.monotonic(), 0.0

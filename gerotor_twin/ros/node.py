@@ -76,12 +76,12 @@ from rclpy.signals import SignalHandlerOptions  # noqa: E402
 from gerotor_twin.errors import InputError, clip, one_line  # noqa: E402
 from gerotor_twin.io import messages as m  # noqa: E402
 from gerotor_twin.io.fastcdr import encode  # noqa: E402
-from gerotor_twin.twin import INPUTS, OUTPUT_TOPICS, TwinCore  # noqa: E402
+from gerotor_twin.twin import INPUTS, TwinCore  # noqa: E402
 from gerotor_twin.twin.clockwatch import ClockWatch  # noqa: E402
 from gerotor_twin.io.decode import decode  # noqa: E402
 from gerotor_twin.twin.inbox import Inbox  # noqa: E402
 from gerotor_twin.twin.sequence import ACCOUNTING_METADATA, accounting_metadata  # noqa: E402
-from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics  # noqa: E402
+from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics, output_topics  # noqa: E402
 from gerotor_twin.ros import params as P  # noqa: E402
 
 __all__ = ["TwinNode", "main", "wrong_type_text"]
@@ -120,6 +120,7 @@ class TwinNode(Node):
         self.model = PumpModel(self.config, prm["bearing_model"])
         self.settings = P.twin_settings(prm)
         self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
+        self.core.residual.meter_topic = prm["delivery_flow_topic"]     # named in the residual's status
         self._warm_up(Inputs)
         self._check_real_time(prm["startup_rtf_threshold"])
         self.stopping = False
@@ -134,7 +135,8 @@ class TwinNode(Node):
                              durability=DurabilityPolicy.VOLATILE)
         self._in_group = MutuallyExclusiveCallbackGroup()     # one input callback at a time (SequenceGaps)
         self._tick_group = MutuallyExclusiveCallbackGroup()
-        self.pubs = {t: self.create_publisher(_msg_class(mt), t, out_qos) for t, mt in OUTPUT_TOPICS.items()}
+        self.outputs = output_topics(self.model.N)          # topic -> type, per-chamber topics included
+        self.pubs = {t: self.create_publisher(_msg_class(mt), t, out_qos) for t, mt in self.outputs.items()}
         self.pubs[DIAGNOSTICS_TOPIC] = self.create_publisher(_msg_class(m.DIAGNOSTIC_ARRAY), DIAGNOSTICS_TOPIC,
                                                              out_qos)
         self.fq = {t: p.topic_name for t, p in self.pubs.items()}     # fully qualified (remapped) names
@@ -195,7 +197,7 @@ class TwinNode(Node):
         from gerotor_twin.ros.node_log import NodeLogFiles
         self.log_files = NodeLogFiles(self.prm, self.get_logger(), self._log_metadata)
         inputs = {sub.topic_name: INPUTS[kind].msgtype for kind, sub in self.subs.items()}
-        self.log = self.log_files.open(log_topics(inputs, self.fq, self.log_files.logged))
+        self.log = self.log_files.open(log_topics(inputs, self.fq, self.log_files.logged, self.outputs))
 
     def _log_metadata(self) -> dict:
         from gerotor_twin.io.mcap_log import twin_log_metadata

@@ -11,7 +11,7 @@ node so the node only wires it:
   once ``log_min_free_mb`` are free (checked every ``log_retry_s``);
 * :meth:`NodeLogFiles.due` decides which outputs go to the log
   (``log_outputs_every``, ``log_waveform_every``, ``log_diagnostics_every``,
-  ``log_summary_values``; inputs and ``twin/flow_summary`` always);
+  ``log_summary_values``; inputs, ``twin/flow_summary`` and ``twin/flow_residual`` always);
 * :meth:`NodeLogFiles.status` gives the log's part of the node's /diagnostics
   status (ERROR while the log cannot be written).
 
@@ -29,7 +29,7 @@ from typing import Any, Callable, Iterable
 
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import messages as m
-from gerotor_twin.twin.outputs import CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC, INSTANT_TOPICS, SUMMARY_VALUE_TOPICS
+from gerotor_twin.twin.outputs import CHAMBER_WAVEFORM, DIAGNOSTICS_TOPIC, VALUE_TOPICS, is_instant
 
 __all__ = ["NodeLogFiles", "log_directory"]
 
@@ -165,19 +165,19 @@ class NodeLogFiles:
         """Whether an output topic goes to the log at all."""
         if topic == CHAMBER_WAVEFORM:
             return self.prm["log_waveforms"]
-        return topic not in SUMMARY_VALUE_TOPICS or self.prm["log_summary_values"]
+        return topic not in VALUE_TOPICS or self.prm["log_summary_values"]
 
     def due(self, topic: str, diag: dict | None = None) -> bool:
         """Log this message? Every N-th waveform / instantaneous output / diagnostics message.
 
-        Inputs and ``twin/flow_summary`` are always logged; a /diagnostics message whose
+        Inputs, ``twin/flow_summary`` and ``twin/flow_residual`` are always logged; a /diagnostics message whose
         highest level differs from the last logged one is always logged.
         """
         if not self.logged(topic):
             return False
         every = {CHAMBER_WAVEFORM: self.prm["log_waveform_every"],
                  DIAGNOSTICS_TOPIC: self.prm["log_diagnostics_every"]}.get(
-            topic, self.prm["log_outputs_every"] if topic in INSTANT_TOPICS else 1)
+            topic, self.prm["log_outputs_every"] if is_instant(topic) else 1)
         n = self._counts[topic] = self._counts.get(topic, 0) + 1
         if topic == DIAGNOSTICS_TOPIC and diag is not None:
             level = max((int(st["level"]) for st in diag["status"]), default=0)

@@ -112,12 +112,14 @@ PARAMETERS: tuple[Param, ...] = (
                          "'' = no log"),
     Param("log_compression", "zstd", "MCAP chunk compression", choices=("zstd", "lz4", "none")),
     Param("log_waveforms", True, "also log twin/chamber_waveform to MCAP (large) [-]"),
-    Param("log_summary_values", False, "also log the twin/flow_summary/<name> Float64 topics (they repeat "
-                                       "twin/flow_summary, which the shipped layouts label by name) [-]"),
+    Param("log_summary_values", False, "also log the topics that repeat another logged output: "
+                                       "twin/flow_summary/<name> and twin/flow_residual/<name> (Float64), "
+                                       "twin/revolution (= twin/flow_summary, which the shipped layouts label "
+                                       "by name), twin/health_update (= twin/health) [-]"),
     Param("log_waveform_every", 500, "log every N-th published chamber waveform (1 = all) [-]", 1, 1000000),
-    Param("log_outputs_every", 10, "log every N-th publication of chamber pressures, delivery flow, "
-                                  "eccentricity, tooth gaps, chamber peaks (1 = all; inputs and flow_summary: "
-                                  "always all) [-]",
+    Param("log_outputs_every", 10, "log every N-th publication of chamber pressures (array and per "
+                                  "chamber), delivery flow, eccentricity, tooth gaps, chamber peaks, twin/sample "
+                                  "(1 = all; inputs, flow_summary and flow_residual: always all) [-]",
           1, 1000000),
     Param("log_diagnostics_every", 10, "log every N-th /diagnostics message (1 = all; ERROR/WARN changes "
                                       "are always logged) [-]", 1, 1000000),

@@ -29,13 +29,17 @@ module              content
                     to the clock (hold, skip, reset, instantaneous outputs)
 ``revolution``      :class:`RevolutionRecorder`, :class:`Revolution`: flow
                     summary and waveform of each completed revolution
+``residual``        :class:`FlowResidual`: measured against predicted
+                    revolution-mean flow (``twin/flow_residual``);
+                    :class:`FlowSamples`, the flow-meter samples
 ``events``          :class:`EventLog`: rate-limited ``(level, text)`` events
 ``settings``        :class:`TwinSettings` (sample grid, publish period, lag,
                     staleness, filtering, waveform)
 ``inputs``          :data:`INPUTS` (kinds, default topics, types, units),
                     :func:`sample_from_message`, :class:`InputChannel`
-``outputs``         :data:`OUTPUT_TOPICS`, :class:`OutputMessage`, flow-summary
-                    layout
+``outputs``         :data:`OUTPUT_TOPICS`, :func:`output_topics` (with the
+                    per-chamber topics), :class:`OutputMessage`, flow-summary
+                    and residual layout, chamber names
 ``diagnostics``     DiagnosticStatus dicts from :meth:`TwinCore.snapshot`
 ``sequence``        :class:`SequenceGaps`: inputs lost before reception, from
                     gaps in the publishers' sequence numbers; the

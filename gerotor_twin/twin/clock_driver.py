@@ -77,6 +77,8 @@ class ClockDriver:
         self.epoch_ns = 0                   #: clock time of model time 0 [ns]
         self.t_ns: int | None = None        #: clock time the model has reached [ns]
         self._last_now: int | None = None
+        #: called with the new clock time [ns] when the clock jumps back (a bag loop), after the reset
+        self.jump_back_listeners: list = []
         self.status = "waiting"
         self.hold_reason = "no inputs yet"
         self._inputs: Inputs | None = None
@@ -122,6 +124,8 @@ class ClockDriver:
             self._reset("clock_jump_back", 1, f"clock jumped back by {(self._last_now - now_ns) / NS:.6g} s "
                         "(bag loop?): model reset, restarting from the next valid inputs", now_ns)
             self.book.clock_jumped_back(now_ns)
+            for listener in self.jump_back_listeners:
+                listener(now_ns)
             self.t_ns = None
         self._last_now = now_ns
         target = (now_ns // S) * S

@@ -39,9 +39,11 @@ Input sampling (deterministic)
     they lag the clock by less than one cell.  The shaft angle is integrated
     from the speed; the advance is also split at every whole revolution.
 Outputs
-    At every ``publish_period_s`` multiple of model time: chamber pressures,
-    delivery flow, eccentricity (values at that instant) and the per-gap
-    minimum tooth-tip gaps since the previous publication.  At each completed
+    At every ``publish_period_s`` multiple of model time: chamber pressures
+    (as an array and one ``twin/chambers/<chamber>/pressure`` per chamber),
+    delivery flow, eccentricity (values at that instant), the per-gap
+    minimum tooth-tip gaps and per-chamber peak pressures since the previous
+    publication, and ``twin/sample`` (all of them by name, stamped).  At each completed
     revolution: ``twin/flow_summary`` (mean delivery over the revolution from
     the exact delivered volume, theoretical = displacement / revolution time,
     leakage = their difference, volumetric efficiency) and every
@@ -101,6 +103,7 @@ from gerotor_twin.twin.clock_driver import ClockDriver, TickResult
 from gerotor_twin.twin.events import EventLog
 from gerotor_twin.twin.health import HealthMonitor, HealthSettings
 from gerotor_twin.twin.input_book import InputBook
+from gerotor_twin.twin.residual import FlowResidual
 from gerotor_twin.twin.revolution import RevolutionRecorder
 from gerotor_twin.twin.settings import NS, TwinSettings
 from gerotor_twin.twin.startup_rtf import StartupRtf, measure as measure_rtf
@@ -150,6 +153,9 @@ class TwinCore:
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": {}}
         self._last_tick: TickResult | None = None
         self.health = HealthMonitor(model, health or HealthSettings())
+        #: measured against predicted revolution-mean flow (``twin/flow_residual``)
+        self.residual = FlowResidual(model.displacement, s.stale_timeout_s)
+        self.driver.jump_back_listeners += [self.residual.clock_jumped_back, self.health.clock_jumped_back]
         #: result of :meth:`measure_startup_rtf` (None: not measured)
         self.startup_rtf: StartupRtf | None = None
 
@@ -176,6 +182,7 @@ class TwinCore:
                 last = self.book.channels["delivery_flow"].latest()
             if last is not None:
                 self.health.add_flow(last[0], receive_ns)
+                self.residual.add_flow(last[0], receive_ns)
         return accepted
 
     def note_sequence(self, kind: str, seq: int | None, receive_ns: int) -> int:
@@ -244,6 +251,7 @@ class TwinCore:
         now_ns = int(now_ns)
         res = TickResult(now_ns, self.driver.t_ns)
         self.driver.tick(now_ns, res)
+        res.messages.extend(self.residual.observe(res.messages))
         running = self.driver.status == "running"
         res.messages.extend(self.health.observe(now_ns, self.driver.inputs if running else None, res.messages))
         res.compute_s = self._timer() - t0
@@ -330,6 +338,7 @@ class TwinCore:
             "counts": self.counts(), "inputs": self.input_report(now_ns),
             "last_summary": dict(zip(O.SUMMARY_FIELDS, last)) if last else None,
             **self.driver.oil.report(), "oil_temperature_warn": self.driver.oil.warn,
+            "flow_residual": self.residual.report(),
         }
         snap.update({k: (dict(v) if isinstance(v, collections.Counter) else v) for k, v in self.stats.items()})
         return snap

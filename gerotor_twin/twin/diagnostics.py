@@ -64,6 +64,7 @@ def model_status(snap: dict, delta: dict[str, int]) -> dict:
         "oil_temperature_fallbacks": snap.get("oil_temperature_fallbacks", 0),
         "oil_temperature_lead_k": _fmt(snap.get("oil_temperature_lead_k")),
     }
+    values.update(snap.get("flow_residual") or {})
     for k in _EVENTS:
         values[k] = counts.get(k, 0)
         values[k + "_last_period"] = delta.get(k, 0)

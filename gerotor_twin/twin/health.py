@@ -23,7 +23,8 @@ When it is updated (robust to ramps and to the flow meter's lag)
     the efficiency RMSE the calibration measured (``calibration.residuals.eta_rmse`` of a
     config written by ``gerotor-twin calibrate``; 0 for an uncalibrated config): the twin is
     not trusted more closely than its calibration showed it fits the pump.
-What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`)
+What is published (``twin/health``, one message per update, :data:`HEALTH_FIELDS`; the same by name,
+stamped, on ``twin/health_update``)
     k and its standard deviation, the clearance factor k^(1/n), the volumetric
     efficiency at the reference point (``reference_rpm``, ``reference_bar``, each capped at the
     pump's ``range``) with k
@@ -52,7 +53,8 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, OutputMessage
+from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
+from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse"]
 
@@ -175,7 +177,7 @@ class HealthMonitor:
         self.exponent = clearance_exponent(model, s) if s.enabled else 3.0
         self.est = lf.LeakageEstimate(var=s.initial_sd ** 2)
         self.eta_rmse_cal = calibration_eta_rmse(model.config)
-        self._flow: collections.deque = collections.deque(maxlen=100_000)
+        self._flow = FlowSamples()
         self._res: collections.deque = collections.deque(maxlen=s.residual_window)
         self._ref = None            # (omega, p_delivery) the steady stretch started with
         self._steady_since: int | None = None
@@ -187,8 +189,11 @@ class HealthMonitor:
     # ------------------------------------------------------------- inputs
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
         """A measured delivery flow sample [m³/s] (accepted by the input book)."""
-        if math.isfinite(value_m3s):
-            self._flow.append((int(receive_ns), float(value_m3s)))
+        self._flow.add(value_m3s, receive_ns)
+
+    def clock_jumped_back(self, now_ns: int) -> None:
+        """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
+        self._flow.forget_after(now_ns)
 
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
@@ -227,9 +232,8 @@ class HealthMonitor:
         s = self.settings
         if self._steady_since is None or w.start_ns - self._steady_since < s.settle_s * NS or w.revs == 0:
             return []
-        samples = [v for t, v in self._flow if w.start_ns <= t < end_ns]
-        while self._flow and self._flow[0][0] < w.start_ns:
-            self._flow.popleft()
+        samples = self._flow.between(w.start_ns, end_ns)
+        self._flow.drop_before(w.start_ns)
         if len(samples) < s.min_flow_samples:
             return []
         q_meas = sum(samples) / len(samples)
@@ -246,7 +250,8 @@ class HealthMonitor:
         values = self.values()
         self.history.append({"t_ns": end_ns, **dict(zip(HEALTH_FIELDS, values))})
         return [OutputMessage(HEALTH_TOPIC, m.FLOAT64_MULTIARRAY, end_ns,
-                              m.float64_multiarray(values, (",".join(HEALTH_FIELDS),)))]
+                              m.float64_multiarray(values, (",".join(HEALTH_FIELDS),))),
+                named_values(HEALTH_UPDATE, end_ns, HEALTH_FIELDS, values)]
 
     def _adapt(self, k: float) -> None:
         from gerotor_twin.model.clearance_scale import scale_clearances
