@@ -207,6 +207,8 @@ def cmd_bench(args) -> int:
     from .config import load_config
     from .model.bench import realtime
 
+    if args.what == "parts":
+        return _bench_parts(args)
     if args.family is not None and args.what in ("realtime", "accuracy"):
         return _bench_family(args)
     cfg = _with_numerics(load_config(args.config), args.numerics)
@@ -263,6 +265,27 @@ def _reference_cache(args):
         return None
     from .model.reference_cache import default_directory
     return args.reference_cache or default_directory()
+
+
+def _bench_parts(args) -> int:
+    """``bench parts``: where an output step's time goes (model/bench_parts.py), at ``--rpm``/``--bar`` of the pump
+    (default 3000 rpm / 27.5 bar), or with ``--family`` at each pump's top speed and lowest pressure."""
+    from .config import load_config
+    from .compile_events import announce_compilation
+    from .model.bench_parts import print_parts
+    if args.family is not None:
+        from .model.family import family_pumps, pressure_extremes, speed_extremes
+        points = [(p.name, _with_numerics(p.config, args.numerics), speed_extremes(p.config)[1],
+                   pressure_extremes(p.config)[0]) for p in family_pumps(args.family or None, args.pumps)]
+    else:
+        cfg = _with_numerics(load_config(args.config), args.numerics)
+        points = [(args.config or "default pump", cfg, rpm, bar) for rpm in _floats(args.rpm or "3000", "--rpm")
+                  for bar in _floats(args.bar or "27.5", "--bar")]
+    with announce_compilation("compiling the part benchmarks (about a minute)"):
+        rows = print_parts(points)
+    if args.json:
+        _write_json(args.json, {"parts": rows})
+    return 0
 
 
 def _bench_family(args) -> int:
@@ -345,10 +368,11 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
-    b.add_argument("what", choices=("realtime", "accuracy", "models"),
+    b.add_argument("what", choices=("realtime", "accuracy", "models", "parts"),
                    help="realtime: model real-time factor (default 1000/2000/3000 rpm, 27.5 bar); "
                         "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
-                        "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
+                        "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm; "
+                        "parts: where an output step's time goes (each part of the stepper timed alone)")
     b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
                                                "1000,2000,3000; accuracy: default 3000)")
     b.add_argument("--bar", default=None, help="delivery pressure(s) [bar gauge], comma-separated (default 27.5; "

@@ -182,7 +182,7 @@ class Numerics:
     max_step_s: float = 2e-4
     tolerance: float = 0.03
     error_measure: str = "pressure"
-    log_density_tolerance: float = 2e-4
+    log_density_tolerance: float = 1e-3
     closing_tolerance: float = 0.15
     gear_coupling: str = "stages"
     max_substep_attempts: int = 2000
