@@ -12,7 +12,7 @@ STAMP  := $(VENV)/.installed
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
 
-.PHONY: demo demo-model demo-calibrate demo-sweep test test-fast setup precompile clean chromium
+.PHONY: demo demo-model demo-calibrate demo-sweep test test-fast setup precompile bench clean chromium
 
 setup: $(STAMP)
 
@@ -49,6 +49,12 @@ demo-calibrate: $(STAMP)
 demo-sweep: $(STAMP)
 	rm -rf out/demo-sweep
 	$(VENV)/bin/gerotor-twin sweep config/sweep_demo.yaml -o out/demo-sweep
+
+# the real-time table of docs/performance.md, measured again and written in place (a few minutes; the first
+# compile on an empty numba cache adds 2-4 min: BENCH_ARGS="--seconds 1 --repeats 3 --compile")
+BENCH_ARGS ?= --seconds 1 --repeats 3
+bench: $(STAMP)
+	$(VENV)/bin/gerotor-twin bench all $(BENCH_ARGS) --json out/bench/all.json --write-doc docs/performance.md
 
 test: $(STAMP) chromium
 	$(PY) -m pytest -q test

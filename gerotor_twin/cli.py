@@ -209,6 +209,8 @@ def cmd_bench(args) -> int:
 
     if args.family is not None and args.what in ("realtime", "accuracy"):
         return _bench_family(args)
+    if args.what == "all":
+        return _bench_all(args)
     cfg = _with_numerics(load_config(args.config), args.numerics)
     if args.what == "realtime":
         speeds = tuple(int(round(v)) for v in _floats(args.rpm or "1000,2000,3000", "--rpm"))
@@ -267,7 +269,7 @@ def _reference_cache(args):
 
 def _bench_family(args) -> int:
     """``bench accuracy|realtime --family [DIR]``: every pump of the family on its own grid (model/family.py)."""
-    from .model.family import family_grid, family_pumps, pressure_extremes, speed_extremes
+    from .model.family import family_grid, family_pumps
     pumps = family_pumps(args.family or None, args.pumps)
     models = tuple((args.models or "mobility").split(","))
     out, ok = {}, True
@@ -282,16 +284,48 @@ def _bench_family(args) -> int:
             print(f"{pump.name}: {sum(r['within_budget'] for r in rows)} of {len(rows)} points within budget",
                   flush=True)
         else:
-            from .model.bench import realtime
-            rows = []
-            for bar in pressure_extremes(cfg):
-                print(f"{pump.name} ({pump.path}):", flush=True)
-                rows += realtime(cfg, models=models, speeds=(int(round(speed_extremes(cfg)[1])),), bar=bar,
-                                 seconds=args.seconds, repeats=args.repeats)
+            from .model.bench import family_realtime
+            print(f"{pump.name} ({pump.path}):", flush=True)
+            rows = family_realtime(cfg, models=models, seconds=args.seconds, repeats=args.repeats)
         out[pump.name] = {"config": str(pump.path), "points": rows}
     if args.json:
         _write_json(args.json, {"family": out})
     return 0 if ok else 1
+
+
+def _bench_all_command(args) -> str:
+    """The ``bench all`` command line that reproduces ``args`` (written into the block)."""
+    import shlex
+    words = ["gerotor-twin", "bench", "all", "--seconds", f"{args.seconds:g}", "--repeats", str(args.repeats)]
+    for flag, value in (("--config", args.config), ("--numerics", args.numerics), ("--pumps", args.pumps),
+                        ("--family", args.family or None), ("--write-doc", args.write_doc)):
+        words += [flag, shlex.quote(str(value))] if value else []
+    return " ".join(words + (["--compile"] if args.compile else []))
+
+
+def _bench_all(args) -> int:
+    """``bench all``: the default pump and the family in one table (model/bench_all.py), as markdown,
+    JSON and, with ``--write-doc F``, in place between the markers of ``F``."""
+    import dataclasses
+    from .config import load_config
+    from .model.bench_all import markdown, run_all, write_doc
+    from .model.family import family_pumps
+
+    cfg = _with_numerics(load_config(args.config), args.numerics)
+    result = run_all(cfg, family_pumps(args.family or None, args.pumps), seconds=args.seconds, repeats=args.repeats,
+                     with_compile=args.compile, command=_bench_all_command(args))
+    block = markdown(result, args.seconds, args.repeats)
+    print(block, end="")
+    if args.json:
+        _write_json(args.json, dataclasses.asdict(result))
+    if args.markdown:
+        Path(args.markdown).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.markdown).write_text(block, encoding="utf-8")
+        print(f"wrote {args.markdown}")
+    if args.write_doc:
+        write_doc(args.write_doc, block)
+        print(f"updated {args.write_doc}")
+    return 0
 
 
 # ------------------------------------------------------------------- parser
@@ -345,8 +379,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
-    b.add_argument("what", choices=("realtime", "accuracy", "models"),
+    b.add_argument("what", choices=("realtime", "accuracy", "models", "all"),
                    help="realtime: model real-time factor (default 1000/2000/3000 rpm, 27.5 bar); "
+                        "all: the default pump and the family's real-time table of docs/performance.md; "
                         "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
     b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
@@ -374,6 +409,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")
     b.add_argument("--no-reference-cache", action="store_true", help="accuracy: compute every reference afresh")
     b.add_argument("--json", help="write the figures to this JSON file")
+    b.add_argument("--markdown", metavar="F", help="all: write the markdown block to F")
+    b.add_argument("--write-doc", metavar="F", help="all: replace the block between '<!-- bench all: begin -->' and "
+                                                    "'<!-- bench all: end -->' of the markdown file F")
+    b.add_argument("--compile", action="store_true",
+                   help="all: also time the first compile on an empty numba cache (minutes)")
     b.set_defaults(func=cmd_bench)
 
     for name in _COMMAND_MODULES:
