@@ -223,11 +223,15 @@ def cmd_bench(args) -> int:
             _write_json(args.json, {"realtime": rows})
     elif args.what == "accuracy":
         from .model.accuracy import print_accuracy
+        from .model.bench_all import accuracy_markdown, provenance
+        prov = provenance(_bench_command(args))
         rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
                               models=tuple((args.models or "mobility").split(",")),
                               check_reference=args.check_reference, cache=_reference_cache(args))
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
+        if args.markdown or args.write_doc:
+            _write_block(args, accuracy_markdown(rows, prov.finish()), "bench accuracy")
         return 0 if all(r["within_budget"] for r in rows) else 1
     elif args.what == "models":
         from .model.bench import models_cost
@@ -293,14 +297,32 @@ def _bench_family(args) -> int:
     return 0 if ok else 1
 
 
-def _bench_all_command(args) -> str:
-    """The ``bench all`` command line that reproduces ``args`` (written into the block)."""
+def _bench_command(args) -> str:
+    """The ``bench all|accuracy`` command line that reproduces ``args`` (written into its markdown block)."""
     import shlex
-    words = ["gerotor-twin", "bench", "all", "--seconds", f"{args.seconds:g}", "--repeats", str(args.repeats)]
-    for flag, value in (("--config", args.config), ("--numerics", args.numerics), ("--pumps", args.pumps),
-                        ("--family", args.family or None), ("--write-doc", args.write_doc)):
+    words = ["gerotor-twin", "bench", args.what]
+    if args.what == "all":
+        words += ["--seconds", f"{args.seconds:g}", "--repeats", str(args.repeats)] + (["--compile"] * args.compile)
+        options = ("--config", args.config), ("--family", args.family or None), ("--pumps", args.pumps)
+    else:
+        options = (("--rpm", args.rpm or "3000"), ("--bar", args.bar or "27.5"), ("--models", args.models or "mobility"),
+                   ("--config", args.config))
+    for flag, value in (*options, ("--numerics", args.numerics), ("--write-doc", args.write_doc)):
         words += [flag, shlex.quote(str(value))] if value else []
-    return " ".join(words + (["--compile"] if args.compile else []))
+    return " ".join(words)
+
+
+def _write_block(args, block: str, name: str) -> None:
+    """Print the markdown ``block`` and write it to ``--markdown F`` and into ``--write-doc F`` (block ``name``)."""
+    from .model.bench_all import write_doc
+    print(block, end="")
+    if args.markdown:
+        Path(args.markdown).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.markdown).write_text(block, encoding="utf-8")
+        print(f"wrote {args.markdown}")
+    if args.write_doc:
+        write_doc(args.write_doc, block, name)
+        print(f"updated {args.write_doc}")
 
 
 def _bench_all(args) -> int:
@@ -308,23 +330,15 @@ def _bench_all(args) -> int:
     JSON and, with ``--write-doc F``, in place between the markers of ``F``."""
     import dataclasses
     from .config import load_config
-    from .model.bench_all import markdown, run_all, write_doc
+    from .model.bench_all import markdown, run_all
     from .model.family import family_pumps
 
     cfg = _with_numerics(load_config(args.config), args.numerics)
     result = run_all(cfg, family_pumps(args.family or None, args.pumps), seconds=args.seconds, repeats=args.repeats,
-                     with_compile=args.compile, command=_bench_all_command(args))
-    block = markdown(result, args.seconds, args.repeats)
-    print(block, end="")
+                     with_compile=args.compile, command=_bench_command(args))
     if args.json:
         _write_json(args.json, dataclasses.asdict(result))
-    if args.markdown:
-        Path(args.markdown).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.markdown).write_text(block, encoding="utf-8")
-        print(f"wrote {args.markdown}")
-    if args.write_doc:
-        write_doc(args.write_doc, block)
-        print(f"updated {args.write_doc}")
+    _write_block(args, markdown(result, args.seconds, args.repeats), "bench all")
     return 0
 
 
@@ -409,9 +423,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")
     b.add_argument("--no-reference-cache", action="store_true", help="accuracy: compute every reference afresh")
     b.add_argument("--json", help="write the figures to this JSON file")
-    b.add_argument("--markdown", metavar="F", help="all: write the markdown block to F")
-    b.add_argument("--write-doc", metavar="F", help="all: replace the block between '<!-- bench all: begin -->' and "
-                                                    "'<!-- bench all: end -->' of the markdown file F")
+    b.add_argument("--markdown", metavar="F", help="all / accuracy: write the figures as a markdown block to F")
+    b.add_argument("--write-doc", metavar="F", help="all / accuracy: replace the block between '<!-- bench WHAT: begin "
+                                                    "-->' and '<!-- bench WHAT: end -->' of the markdown file F")
     b.add_argument("--compile", action="store_true",
                    help="all: also time the first compile on an empty numba cache (minutes)")
     b.set_defaults(func=cmd_bench)

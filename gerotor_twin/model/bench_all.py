@@ -1,12 +1,14 @@
-"""``gerotor-twin bench all``: the figures of docs/performance.md, as one markdown block, in one run.
+"""Benchmark figures as markdown blocks that a doc includes and a rerun replaces in place.
 
-One run times the default pump (both compiled gear models at 1000 / 2000 / 3000 rpm and its rated
-pressure) and every pump of the family at its top speed and both ends of its delivery pressure
-(:func:`.bench.realtime`, :func:`.bench.family_realtime`), optionally the first compile of the
-numba kernels on a fresh cache, and writes one markdown block with the date, the commit, the
-command, the machine and its load.  ``--write-doc F`` replaces the block between
-:data:`BEGIN` and :data:`END` of ``F`` in place, so a rerun updates the doc.  Figures are printed
-and written, never asserted in tests.
+``gerotor-twin bench all`` times the default pump (both compiled gear models at 1000 / 2000 /
+3000 rpm and its rated pressure) and every pump of the family at its top speed and both ends of
+its delivery pressure (:func:`.bench.realtime`, :func:`.bench.family_realtime`), the wall time per
+revolution of the four outer-gear models (:func:`.bench.models_cost`), optionally the first compile
+of the numba kernels on a fresh cache, and writes one block (the tables of docs/performance.md).  ``gerotor-twin bench accuracy`` writes its points as a block too
+(:func:`accuracy_markdown`, the table of docs/numerics.md).  Each block opens with the date, the
+commit, the command, the machine and its load (:class:`Provenance`); ``--write-doc F`` replaces
+the block between the markers of its name (:func:`markers`) in ``F``.  Figures are printed and
+written, never asserted in tests.
 """
 from __future__ import annotations
 
@@ -20,11 +22,16 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["BEGIN", "END", "Machine", "BenchAll", "machine", "git_commit", "first_compile", "run_all",
-           "markdown", "replace_block", "write_doc"]
+__all__ = ["markers", "BEGIN", "END", "Machine", "Provenance", "BenchAll", "machine", "git_commit", "provenance",
+           "first_compile", "run_all", "markdown", "accuracy_markdown", "replace_block", "write_doc"]
 
-BEGIN = "<!-- bench all: begin -->"   #: the first line of the generated block in a doc
-END = "<!-- bench all: end -->"       #: its last line
+
+def markers(name: str) -> tuple[str, str]:
+    """The first and last line of the generated block ``name`` in a doc (``"bench all"``, ``"bench accuracy"``)."""
+    return f"<!-- {name}: begin -->", f"<!-- {name}: end -->"
+
+
+BEGIN, END = markers("bench all")   #: the lines around the block of ``bench all``
 
 _ROOT = Path(__file__).resolve().parents[2]
 
@@ -53,8 +60,8 @@ class Machine:
 
 
 @dataclass
-class BenchAll:
-    """The result of one ``bench all`` run.
+class Provenance:
+    """Where, when and how figures were measured.
 
     Attributes
     ----------
@@ -63,17 +70,11 @@ class BenchAll:
     commit : str
         Short commit of the tree (``+ uncommitted changes`` when dirty), or ``unknown``.
     command : str
-        The command line that produced it.
+        The command line that produced them.
     machine : Machine
         Where it ran.
     load : tuple of float
-        1-minute load average before and after the run.
-    default_rows : list of dict
-        :func:`.bench.realtime` rows of the default pump (``pump`` key added).
-    family_rows : list of dict
-        :func:`.bench.realtime` rows of the family (``pump`` key added).
-    compile : dict or None
-        ``{"seconds": float, "line": str}`` of :func:`first_compile`, None when not run.
+        1-minute load average at the start and, once :meth:`finish` ran, at the end.
     """
 
     date: str
@@ -81,8 +82,51 @@ class BenchAll:
     command: str
     machine: Machine
     load: tuple
+
+    def finish(self) -> "Provenance":
+        """Record the load at the end of the run; returns ``self``."""
+        self.load = (self.load[0], os.getloadavg()[0])
+        return self
+
+    def sentence(self) -> str:
+        """One markdown line: date, commit, command, machine, load (and whether the machine was loaded)."""
+        m = self.machine
+        loaded = max(self.load) > 0.5 * m.cores
+        return (f"Measured {self.date} UTC at commit {self.commit}: `{self.command}`. Machine: {m.cpu}, "
+                f"{m.cores} logical cores, {m.system}, Python {m.python}, numba {m.numba}; 1-minute load average "
+                f"{self.load[0]:.1f} at the start, {self.load[-1]:.1f} at the end"
+                + (" (other jobs were running: figures of a loaded machine)." if loaded else "."))
+
+
+def provenance(command: str) -> Provenance:
+    """The :class:`Provenance` of a run of ``command`` starting now (the end load follows from :meth:`finish`)."""
+    start = datetime.datetime.now(datetime.timezone.utc)
+    return Provenance(date=start.strftime("%Y-%m-%d %H:%M"), commit=git_commit(), command=command,
+                      machine=machine(), load=(os.getloadavg()[0],))
+
+
+@dataclass
+class BenchAll:
+    """The result of one ``bench all`` run.
+
+    Attributes
+    ----------
+    provenance : Provenance
+        Date, commit, command, machine and load.
+    default_rows : list of dict
+        :func:`.bench.realtime` rows of the default pump (``pump`` key added).
+    family_rows : list of dict
+        :func:`.bench.realtime` rows of the family (``pump`` key added).
+    model_rows : list of dict
+        :func:`.bench.models_cost` rows of the default pump.
+    compile : dict or None
+        ``{"seconds": float, "line": str}`` of :func:`first_compile`, None when not run.
+    """
+
+    provenance: Provenance
     default_rows: list = field(default_factory=list)
     family_rows: list = field(default_factory=list)
+    model_rows: list = field(default_factory=list)
     compile: dict | None = None
 
 
@@ -145,7 +189,7 @@ def first_compile() -> dict:
 
 def run_all(config, pumps, seconds: float = 1.0, repeats: int = 3, with_compile: bool = False,
             command: str = "gerotor-twin bench all", out=print) -> BenchAll:
-    """Run the benchmarks of docs/performance.md.
+    """Run the benchmarks of docs/performance.md: real time of the default pump and the family, the gear models' cost.
 
     Parameters
     ----------
@@ -167,11 +211,9 @@ def run_all(config, pumps, seconds: float = 1.0, repeats: int = 3, with_compile:
     -------
     BenchAll
     """
-    from .bench import family_realtime, realtime
+    from .bench import family_realtime, models_cost, realtime
 
-    start = datetime.datetime.now(datetime.timezone.utc)
-    result = BenchAll(date=start.strftime("%Y-%m-%d %H:%M"), commit=git_commit(), command=command,
-                      machine=machine(), load=(os.getloadavg()[0],))
+    result = BenchAll(provenance=provenance(command))
     if with_compile:
         out("first compile on an empty numba cache (python -m gerotor_twin.precompile) ...")
         result.compile = first_compile()
@@ -183,7 +225,8 @@ def run_all(config, pumps, seconds: float = 1.0, repeats: int = 3, with_compile:
         out(f"{pump.name} ({pump.path}):")
         rows = family_realtime(pump.config, models=("mobility",), seconds=seconds, repeats=repeats, out=out)
         result.family_rows += [dict(r, pump=pump.name) for r in rows]
-    result.load = (result.load[0], os.getloadavg()[0])
+    result.model_rows = models_cost(config, bar=config.range.max_delivery_bar, revolutions=repeats, out=out)
+    result.provenance.finish()
     return result
 
 
@@ -193,8 +236,16 @@ def _row(r: dict) -> str:
             f"{r['cpu_real_time_factor']:.2f} | {r['substeps_per_revolution']:.0f} | {r['us_per_substep']:.2f} |")
 
 
+def _model_row(r: dict) -> str:
+    """One markdown table row of a :func:`.bench.models_cost` row."""
+    rel = f"{r['relative_to_mobility']:.2f}" if r.get("relative_to_mobility") else "–"
+    return (f"| {r['model']} | {r['rpm']:.0f} | {1e3 * r['wall_s_per_rev']:.2f} ms | {rel} | "
+            f"{r['real_time_factor']:.3g} |")
+
+
 def markdown(result: BenchAll, seconds: float, repeats: int) -> str:
-    """The block docs/performance.md includes: provenance, machine, one table, between :data:`BEGIN` and :data:`END`.
+    """The block docs/performance.md includes, between :data:`BEGIN` and :data:`END`: provenance and machine, the
+    first compile (if timed), the real-time table, the gear models' cost (if timed).
 
     Parameters
     ----------
@@ -207,18 +258,11 @@ def markdown(result: BenchAll, seconds: float, repeats: int) -> str:
     str
         The block, ending in a newline.
     """
-    m = result.machine
-    lines = [
-        BEGIN,
-        f"Measured {result.date} UTC at commit {result.commit}: `{result.command}`. Machine: {m.cpu}, "
-        f"{m.cores} logical cores, {m.system}, Python {m.python}, numba {m.numba}; 1-minute load average "
-        f"{result.load[0]:.1f} at the start, {result.load[-1]:.1f} at the end"
-        + (" (other jobs were running: figures of a loaded machine)." if max(result.load) > 0.5 * m.cores else "."),
-        "",
-    ]
+    lines = [BEGIN, result.provenance.sentence(), ""]
     if result.compile is not None:
-        lines += [f"First compile on an empty numba cache (`python -m gerotor_twin.precompile`): "
-                  f"{result.compile['seconds']:.0f} s ({result.compile['line'].rstrip('.')}).", ""]
+        lines += [f"First compile on an empty numba cache (`python -m gerotor_twin.precompile`, the mobility and "
+                  f"fixed-centre models): {result.compile['seconds']:.0f} s of wall time; it printed "
+                  f"`{result.compile['line']}`.", ""]
     lines += [
         f"Model alone, one core; each point the median of {repeats} runs of {seconds:g} s simulated after a warm-up. "
         "RTF: simulated / wall time; CPU RTF: simulated / CPU time; µs/sub-step: wall time per ROS2 sub-step "
@@ -227,27 +271,74 @@ def markdown(result: BenchAll, seconds: float, repeats: int) -> str:
         "| pump | model | rpm | bar | RTF | CPU RTF | sub-steps/rev | µs/sub-step |",
         "|---|---|---|---|---|---|---|---|",
         *(_row(r) for r in result.default_rows + result.family_rows),
-        END,
     ]
+    if result.model_rows:
+        lines += ["", "The four outer-gear models of the default pump at its rated pressure (as `bench models`: wall "
+                  f"time per simulated revolution, timed over {repeats} revolutions from the mobility model's "
+                  "periodic state; RTF: simulated / wall time):", "",
+                  "| gear model | rpm | wall time / rev | × mobility | RTF |", "|---|---|---|---|---|",
+                  *(_model_row(r) for r in result.model_rows)]
+    lines.append(END)
     return "\n".join(lines) + "\n"
 
 
-def replace_block(text: str, block: str) -> str:
-    """``text`` with its part from the line :data:`BEGIN` to the line :data:`END` replaced by ``block``.
+def _pct(x: float, digits: int = 2, sign: bool = False) -> str:
+    """``x`` (a fraction) in percent as the docs write it: ``0.23 %``, ``+1.05 %``."""
+    return f"{100 * x:{'+' if sign else ''}.{digits}f} %"
+
+
+def accuracy_markdown(rows, prov: Provenance) -> str:
+    """The block of ``bench accuracy`` points (:func:`.accuracy.print_accuracy` rows) for docs/numerics.md.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One per point: model, rpm, bar and the figures of :func:`.accuracy.accuracy`, ``within_budget``.
+    prov : Provenance
+
+    Returns
+    -------
+    str
+        The block between the markers of ``"bench accuracy"``, ending in a newline.
+    """
+    begin, end = markers("bench accuracy")
+    lines = [begin, prov.sentence(), "",
+             "Range: the reference's highest minus lowest chamber pressure; RMS and max: chamber-pressure error of "
+             "that range; peak: the model's peak output against the reference's, of its gauge peak; sampled: the "
+             "waveform's maximum at the output angles, = the solver's error there + what the output grid misses "
+             "between them; η: volumetric efficiency, relative; flow RMS: of the mean delivery flow.", "",
+             "| model | rpm | bar | range | RMS | max | peak | sampled (solver + grid) | η | flow RMS | "
+             "sub-steps/rev | verdict |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(
+            f"| {r['model']} | {r['rpm']:.0f} | {r['bar']:g} | {r['pressure_range'] / 1e5:.1f} bar | "
+            f"{_pct(r['rms_pressure_error_of_range'])} | {_pct(r['max_pressure_error_of_range'], 1)} | "
+            f"{_pct(r['peak_pressure_error_gauge'], sign=True)} | {_pct(r['sampled_peak_error'], sign=True)} "
+            f"({_pct(r['peak_numerics_error'], sign=True)} {_pct(r['peak_sampling_error'], sign=True)}) | "
+            f"{_pct(r['efficiency_error'], 3, sign=True)} | {_pct(r['flow_rms_error'])} | "
+            f"{r['substeps_per_revolution']:.0f} | {'ok' if r['within_budget'] else 'outside'} |")
+    lines.append(end)
+    return "\n".join(lines) + "\n"
+
+
+def replace_block(text: str, block: str, name: str = "bench all") -> str:
+    """``text`` with its part from the begin line to the end line of ``name`` (:func:`markers`) replaced by ``block``.
 
     Raises
     ------
     ValueError
-        ``text`` does not hold exactly one :data:`BEGIN` followed by one :data:`END`.
+        ``text`` does not hold exactly one begin line followed by one end line of ``name``.
     """
-    if text.count(BEGIN) != 1 or text.count(END) != 1 or text.index(BEGIN) > text.index(END):
-        raise ValueError(f"expected one '{BEGIN}' line followed by one '{END}' line")
-    head, _, rest = text.partition(BEGIN)
-    _, _, tail = rest.partition(END)
+    begin, end = markers(name)
+    if text.count(begin) != 1 or text.count(end) != 1 or text.index(begin) > text.index(end):
+        raise ValueError(f"expected one '{begin}' line followed by one '{end}' line")
+    head, _, rest = text.partition(begin)
+    _, _, tail = rest.partition(end)
     return head + block.rstrip("\n") + tail
 
 
-def write_doc(path, block: str) -> None:
-    """Replace the generated block of the markdown file ``path`` by ``block`` (:func:`replace_block`)."""
+def write_doc(path, block: str, name: str = "bench all") -> None:
+    """Replace the generated block ``name`` of the markdown file ``path`` by ``block`` (:func:`replace_block`)."""
     path = Path(path)
-    path.write_text(replace_block(path.read_text(encoding="utf-8"), block), encoding="utf-8")
+    path.write_text(replace_block(path.read_text(encoding="utf-8"), block, name), encoding="utf-8")
