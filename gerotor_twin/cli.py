@@ -326,8 +326,8 @@ def _write_block(args, block: str, name: str) -> None:
 
 
 def _bench_all(args) -> int:
-    """``bench all``: the default pump and the family in one table (model/bench_all.py), as markdown,
-    JSON and, with ``--write-doc F``, in place between the markers of ``F``."""
+    """``bench all``: the figures of docs/performance.md (model/bench_all.py) printed as one markdown block, in
+    JSON with ``--json F``, in ``--markdown F`` and, with ``--write-doc F``, in place between the markers of ``F``."""
     import dataclasses
     from .config import load_config
     from .model.bench_all import markdown, run_all
@@ -395,7 +395,8 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
     b.add_argument("what", choices=("realtime", "accuracy", "models", "all"),
                    help="realtime: model real-time factor (default 1000/2000/3000 rpm, 27.5 bar); "
-                        "all: the default pump and the family's real-time table of docs/performance.md; "
+                        "all: the figures of docs/performance.md (real time of the default pump and the family, "
+                        "the four gear models' cost; --compile: the first compile), as one markdown block; "
                         "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm")
     b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
