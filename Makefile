@@ -12,7 +12,7 @@ STAMP  := $(VENV)/.installed
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
 
-.PHONY: demo demo-model demo-calibrate demo-sweep test test-fast setup precompile clean chromium
+.PHONY: demo demo-model demo-calibrate demo-sweep test test-fast setup precompile bench bench-accuracy clean chromium
 
 setup: $(STAMP)
 
@@ -49,6 +49,18 @@ demo-calibrate: $(STAMP)
 demo-sweep: $(STAMP)
 	rm -rf out/demo-sweep
 	$(VENV)/bin/gerotor-twin sweep config/sweep_demo.yaml -o out/demo-sweep
+
+# the figures of docs/performance.md (first compile, real time of the default pump and the family, the gear
+# models' cost), measured again and written in place: about 5 min on 2 cores, 2.5 of them the compile
+BENCH_ARGS ?= --seconds 3 --repeats 3 --compile
+bench: $(STAMP)
+	$(VENV)/bin/gerotor-twin bench all $(BENCH_ARGS) --json out/bench/all.json --write-doc docs/performance.md
+
+# the accuracy table of docs/numerics.md, measured again and written in place (seconds with the reference
+# cache filled; each reference computed afresh costs minutes)
+bench-accuracy: $(STAMP)
+	$(VENV)/bin/gerotor-twin bench accuracy --rpm 1000,2000,3000 --bar 5,15,27.5 --models mobility,fixed \
+	    --json out/bench/accuracy.json --write-doc docs/numerics.md
 
 test: $(STAMP) chromium
 	$(PY) -m pytest -q test

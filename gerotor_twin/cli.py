@@ -211,6 +211,8 @@ def cmd_bench(args) -> int:
         return _bench_parts(args)
     if args.family is not None and args.what in ("realtime", "accuracy"):
         return _bench_family(args)
+    if args.what == "all":
+        return _bench_all(args)
     cfg = _with_numerics(load_config(args.config), args.numerics)
     if args.what == "realtime":
         speeds = tuple(int(round(v)) for v in _floats(args.rpm or "1000,2000,3000", "--rpm"))
@@ -223,11 +225,15 @@ def cmd_bench(args) -> int:
             _write_json(args.json, {"realtime": rows})
     elif args.what == "accuracy":
         from .model.accuracy import print_accuracy
+        from .model.bench_all import accuracy_markdown, provenance
+        prov = provenance(_bench_command(args))
         rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
                               models=tuple((args.models or "mobility").split(",")),
                               check_reference=args.check_reference, cache=_reference_cache(args))
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
+        if args.markdown or args.write_doc:
+            _write_block(args, accuracy_markdown(rows, prov.finish()), "bench accuracy")
         return 0 if all(r["within_budget"] for r in rows) else 1
     elif args.what == "models":
         from .model.bench import models_cost
@@ -290,7 +296,7 @@ def _bench_parts(args) -> int:
 
 def _bench_family(args) -> int:
     """``bench accuracy|realtime --family [DIR]``: every pump of the family on its own grid (model/family.py)."""
-    from .model.family import family_grid, family_pumps, pressure_extremes, speed_extremes
+    from .model.family import family_grid, family_pumps
     pumps = family_pumps(args.family or None, args.pumps)
     models = tuple((args.models or "mobility").split(","))
     out, ok = {}, True
@@ -305,16 +311,58 @@ def _bench_family(args) -> int:
             print(f"{pump.name}: {sum(r['within_budget'] for r in rows)} of {len(rows)} points within budget",
                   flush=True)
         else:
-            from .model.bench import realtime
-            rows = []
-            for bar in pressure_extremes(cfg):
-                print(f"{pump.name} ({pump.path}):", flush=True)
-                rows += realtime(cfg, models=models, speeds=(int(round(speed_extremes(cfg)[1])),), bar=bar,
-                                 seconds=args.seconds, repeats=args.repeats)
+            from .model.bench import family_realtime
+            print(f"{pump.name} ({pump.path}):", flush=True)
+            rows = family_realtime(cfg, models=models, seconds=args.seconds, repeats=args.repeats)
         out[pump.name] = {"config": str(pump.path), "points": rows}
     if args.json:
         _write_json(args.json, {"family": out})
     return 0 if ok else 1
+
+
+def _bench_command(args) -> str:
+    """The ``bench all|accuracy`` command line that reproduces ``args`` (written into its markdown block)."""
+    import shlex
+    words = ["gerotor-twin", "bench", args.what]
+    if args.what == "all":
+        words += ["--seconds", f"{args.seconds:g}", "--repeats", str(args.repeats)] + (["--compile"] * args.compile)
+        options = ("--config", args.config), ("--family", args.family or None), ("--pumps", args.pumps)
+    else:
+        options = (("--rpm", args.rpm or "3000"), ("--bar", args.bar or "27.5"), ("--models", args.models or "mobility"),
+                   ("--config", args.config))
+    for flag, value in (*options, ("--numerics", args.numerics), ("--write-doc", args.write_doc)):
+        words += [flag, shlex.quote(str(value))] if value else []
+    return " ".join(words)
+
+
+def _write_block(args, block: str, name: str) -> None:
+    """Print the markdown ``block`` and write it to ``--markdown F`` and into ``--write-doc F`` (block ``name``)."""
+    from .model.bench_all import write_doc
+    print(block, end="")
+    if args.markdown:
+        Path(args.markdown).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.markdown).write_text(block, encoding="utf-8")
+        print(f"wrote {args.markdown}")
+    if args.write_doc:
+        write_doc(args.write_doc, block, name)
+        print(f"updated {args.write_doc}")
+
+
+def _bench_all(args) -> int:
+    """``bench all``: the figures of docs/performance.md (model/bench_all.py) printed as one markdown block, in
+    JSON with ``--json F``, in ``--markdown F`` and, with ``--write-doc F``, in place between the markers of ``F``."""
+    import dataclasses
+    from .config import load_config
+    from .model.bench_all import markdown, run_all
+    from .model.family import family_pumps
+
+    cfg = _with_numerics(load_config(args.config), args.numerics)
+    result = run_all(cfg, family_pumps(args.family or None, args.pumps), seconds=args.seconds, repeats=args.repeats,
+                     with_compile=args.compile, command=_bench_command(args))
+    if args.json:
+        _write_json(args.json, dataclasses.asdict(result))
+    _write_block(args, markdown(result, args.seconds, args.repeats), "bench all")
+    return 0
 
 
 # ------------------------------------------------------------------- parser
@@ -368,8 +416,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     b = sub.add_parser("bench", help="benchmarks (printed figures)")
-    b.add_argument("what", choices=("realtime", "accuracy", "models", "parts"),
+    b.add_argument("what", choices=("realtime", "accuracy", "models", "parts", "all"),
                    help="realtime: model real-time factor (default 1000/2000/3000 rpm, 27.5 bar); "
+                        "all: the figures of docs/performance.md (real time of the default pump and the family, "
+                        "the four gear models' cost; --compile: the first compile), as one markdown block; "
                         "accuracy: default numerics against a tight reference (exit 1 outside the error budget); "
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm; "
                         "parts: where an output step's time goes (each part of the stepper timed alone)")
@@ -398,6 +448,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")
     b.add_argument("--no-reference-cache", action="store_true", help="accuracy: compute every reference afresh")
     b.add_argument("--json", help="write the figures to this JSON file")
+    b.add_argument("--markdown", metavar="F", help="all / accuracy: write the figures as a markdown block to F")
+    b.add_argument("--write-doc", metavar="F", help="all / accuracy: replace the block between '<!-- bench WHAT: begin "
+                                                    "-->' and '<!-- bench WHAT: end -->' of the markdown file F")
+    b.add_argument("--compile", action="store_true",
+                   help="all: also time the first compile on an empty numba cache (minutes)")
     b.set_defaults(func=cmd_bench)
 
     for name in _COMMAND_MODULES:

@@ -9,7 +9,7 @@ from ..bearing.registry import MODEL_NAMES
 from .pump import Inputs, PumpModel
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
-__all__ = ["realtime", "models_cost"]
+__all__ = ["realtime", "family_realtime", "models_cost"]
 
 
 def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), bar=27.5, seconds=1.0,
@@ -46,6 +46,34 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
                          "us_per_substep": us})
             out(f"  {name:9s} {rpm:5d} {bar:5.1f} {wall:9.3f} {seconds / wall:6.2f} {seconds / cpu:8.2f} {sub:14.0f} "
                 f"{us:12.2f}")
+    return rows
+
+
+def family_realtime(config, models=("mobility",), seconds=1.0, repeats=3, out=print) -> list[dict]:
+    """:func:`realtime` of one family pump at its top speed and both ends of its delivery pressure.
+
+    Parameters
+    ----------
+    config : PumpConfig
+        The pump (its ``range`` gives the points, :func:`.family.speed_extremes`, :func:`.family.pressure_extremes`).
+    models : sequence of str
+        Gear models.
+    seconds, repeats : float, int
+        As :func:`realtime`.
+    out : callable
+        Where the printed table goes.
+
+    Returns
+    -------
+    list of dict
+        The :func:`realtime` rows, low pressure first.
+    """
+    from .family import pressure_extremes, speed_extremes
+
+    top = int(round(speed_extremes(config)[1]))
+    rows = []
+    for bar in pressure_extremes(config):
+        rows += realtime(config, models=models, speeds=(top,), bar=bar, seconds=seconds, repeats=repeats, out=out)
     return rows
 
 
