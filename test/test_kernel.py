@@ -272,7 +272,7 @@ def test_pressure_of_inverts_the_mixture(cfg):
     eos = PumpModel(cfg, "fixed").kernel.eos
     args = (eos.beta_liquid, eos.air_fraction, eos.polytropic_index, eos.p_vap, eos.p_atm)
     rng = np.random.default_rng(3)
-    pressures = np.concatenate([eos.p_vap + np.geomspace(1e-3, 8e3, 50),      # below the table: Newton
+    pressures = np.concatenate([eos.p_vap + np.geomspace(1e-3, 8e3, 50),      # Newton below p_vap + 300 Pa, table above
                                 rng.uniform(1e4, 3e5, 200),                     # around atmospheric
                                 rng.uniform(3e5, 4e6, 100), [6e7, 2e8]])        # delivery, above the table
     for p in pressures:

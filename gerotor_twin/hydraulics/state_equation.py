@@ -6,13 +6,18 @@ side.  Two fluid models share one :class:`StateEquation` (field ``kind``):
 
 ``MIXTURE`` (the default, ``fluid_model: mixture``)
     oil + free air + vapour of :mod:`gerotor_twin.hydraulics.mixture`: s(p)
-    and β(p) in closed form; p(s) from a cubic Hermite table on
-    :data:`MIXTURE_NODES` nodes uniform in s between
-    p = :data:`MIXTURE_TABLE_LO_PA` and :data:`MIXTURE_TABLE_HI_PA` (exact
-    slopes dp/ds = β at the nodes), and the safeguarded Newton solve
+    and β(p) in closed form; p(s) from a cubic Hermite table uniform in s up to
+    p = :data:`MIXTURE_TABLE_HI_PA` (exact slopes dp/ds = β at the nodes),
+    and the safeguarded Newton solve
     :func:`~gerotor_twin.hydraulics.mixture.mixture_pressure` outside it
-    (cavitating volumes, pressure peaks).  β between nodes is the derivative
-    of the same cubic.
+    (pressure peaks, deep cavitation).  The table's spacing is that of
+    :data:`MIXTURE_NODES` nodes between p = :data:`MIXTURE_TABLE_LO_PA` and
+    :data:`MIXTURE_TABLE_HI_PA`; with it the table reaches down to
+    :data:`MIXTURE_CAVITATION_MARGIN_PA` above the vapour pressure, in at most
+    :data:`MIXTURE_MAX_NODES` nodes: the chambers of a pump at its top speed and a
+    low delivery pressure spend a fifth to a third of the revolution below 0.1 bar,
+    where the Newton solve is several times the table's cost (docs/performance.md).
+    β between nodes is the derivative of the same cubic.
 ``PAPER`` (``fluid_model: paper``)
     Eq. (23) of [1], smoothed, with a vapour floor
     (:func:`gerotor_twin.hydraulics.fluid.log_density` defines s(p) =
@@ -46,13 +51,15 @@ from .fluid import Fluid, bulk_modulus, log_density
 from .mixture import AirContent, mixture_bulk_modulus, mixture_log_density, mixture_pressure, mixture_table
 
 __all__ = ["exp_small", "StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
-           "BAND_NODES", "MIXTURE_NODES", "PAPER", "MIXTURE", "FLUID_MODELS", "convert_log_density",
+           "BAND_NODES", "MIXTURE_NODES", "MIXTURE_MAX_NODES", "PAPER", "MIXTURE", "FLUID_MODELS", "convert_log_density",
            "with_liquid_modulus"]
 
 BAND_NODES = 1024   #: nodes of the Hermite table of p(s) inside the switch band (paper)
 MIXTURE_NODES = 2048          #: nodes of the Hermite table of p(s) of the mixture
-MIXTURE_TABLE_LO_PA = 1e4     #: lowest pressure of the mixture table [Pa] (Newton below)
+MIXTURE_TABLE_LO_PA = 1e4     #: MIXTURE_NODES nodes span [this, MIXTURE_TABLE_HI_PA]: the table's spacing [Pa]
 MIXTURE_TABLE_HI_PA = 5e7     #: highest pressure of the mixture table [Pa] (Newton above)
+MIXTURE_CAVITATION_MARGIN_PA = 300.0  #: the table reaches down to p_vap + this at that spacing [Pa] (Newton below)
+MIXTURE_MAX_NODES = 16384     #: at most this many nodes (more free air: the table stops higher) [-]
 #: A volume counts as cavitating (kernel counter) where free gas + vapour take more than this
 #: share of the mixture volume (mixture model) [-].
 CAVITATION_GAS_SHARE = 0.01
@@ -208,7 +215,7 @@ def state_equation(fluid: Fluid, model: str = "paper", air: AirContent | None = 
         Free air content and polytropic index of the mixture (default
         :class:`~gerotor_twin.hydraulics.mixture.AirContent`).
 
-    Cost: ≈ 3 ms (paper: the band table), ≈ 1 ms (mixture: 2048 Newton solves).
+    Cost: ≈ 3 ms (paper: the band table), ≈ 5–10 ms (mixture: one Newton solve per table node).
     """
     if model not in FLUID_MODELS:
         from ..errors import InputError
@@ -235,9 +242,13 @@ def _mixture_equation(fluid: Fluid, air: AirContent) -> StateEquation:
     """:class:`StateEquation` of the oil–air–vapour mixture (Hermite table of p(s) over the pump's range)."""
     args = (fluid.bulk_modulus_pa, air.air_fraction, air.polytropic_index, fluid.vapour_pressure_pa,
             fluid.atmospheric_pa)
-    s_lo = mixture_log_density(max(MIXTURE_TABLE_LO_PA, fluid.vapour_pressure_pa + 1.0), *args)
     s_hi = mixture_log_density(MIXTURE_TABLE_HI_PA, *args)
-    p_tab, dp_tab = mixture_table(np.linspace(s_lo, s_hi, MIXTURE_NODES), *args)
+    ds = (s_hi - mixture_log_density(max(MIXTURE_TABLE_LO_PA, fluid.vapour_pressure_pa + 1.0), *args)) / (
+        MIXTURE_NODES - 1)
+    s_floor = mixture_log_density(fluid.vapour_pressure_pa + MIXTURE_CAVITATION_MARGIN_PA, *args)
+    nodes = int(min(MIXTURE_MAX_NODES, max(MIXTURE_NODES, math.ceil((s_hi - s_floor) / ds) + 1)))
+    s_lo = s_hi - (nodes - 1) * ds
+    p_tab, dp_tab = mixture_table(np.linspace(s_lo, s_hi, nodes), *args)
     # cavitating: gas + vapour above CAVITATION_GAS_SHARE of the volume, α₀(p₀ − p_v)/(p − p_v) ≈ share
     p0, pv = fluid.atmospheric_pa, fluid.vapour_pressure_pa
     p_cav = min(p0, pv + air.air_fraction * (p0 - pv) / CAVITATION_GAS_SHARE)
