@@ -75,8 +75,8 @@ def write_report(result: dict, path) -> Path:
     page = f"""<!DOCTYPE html><html><head><meta charset="utf-8"><title>gerotor_twin calibration</title>
 <style>body{{font-family:sans-serif;font-size:14px;margin:2em}} table{{border-collapse:collapse;margin:1em 0}}
 td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}</style></head><body>
-<h1>Calibration from bench recordings</h1>
-<p>Bags: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
+<h1>Calibration from bench recordings or a steady map</h1>
+<p>Data: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
 {html.escape(result['model'])}; {len(result['plateau_records'])} plateaus; {result['date']}; {html.escape(result['software'])}.</p>
 {params}{combos}{notes}{hold}
 <img alt="efficiency error per plateau" src="data:image/png;base64,{_figure(result)}">

@@ -1,6 +1,6 @@
-"""``gerotor-twin calibrate``: plateaus of bench bags → fitted pump config with provenance.
+"""``gerotor-twin calibrate``: plateaus of bench bags, or a pump's steady map → fitted pump config with provenance.
 
-Steps: detect plateaus in every bag; hold out every k-th plateau, fit on the rest and
+Steps: detect plateaus in every bag (or read the map's rows, :mod:`.pump_map`); hold out every k-th plateau, fit on the rest and
 report the error on the held-out ones (prior vs fitted); refit on all plateaus; write
 the pump YAML (the prior with the fitted values and a ``calibration`` block: bags, date,
 parameters with 95 % intervals, identifiability, residuals), and optionally the full
@@ -24,6 +24,7 @@ from ..units import m3s_to_lpm
 from . import calibrate as C
 from .fit_model import apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus
+from .pump_map import MapLimits, PumpMapError, read_map
 
 __all__ = ["calibrate_bags", "fitted_config", "cmd_calibrate", "add_parser"]
 
@@ -58,15 +59,10 @@ def _holdout(ev, names, train, held, raw, displacement, opts, say) -> dict:
             "eta_error": C.summary_stats(after), "eta_error_prior": C.summary_stats(before)}
 
 
-def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
-                   holdout: int = 4, jobs: int | None = None, rcond: float = 0.1,
-                   flow_floor: float = C.MODEL_FLOW_SD_REL,
-                   detector: DetectorSettings = DetectorSettings(), progress=None) -> dict:
-    """Fit ``params`` to the plateaus of ``bags`` (see module doc); the whole result as a dict."""
+def calibrate_bags(bags, *, config_path=None, detector: DetectorSettings = DetectorSettings(), progress=None,
+                   **fit_options) -> dict:
+    """Fit to the plateaus of the bench recordings ``bags`` (see :func:`calibrate_records`)."""
     say = progress or (lambda s: None)
-    cfg = load_config(config_path)
-    raw = cfg.to_dict()
-    raw.pop("calibration", None)
     records = []
     for b in bags:
         found = bench_plateaus(b, detector)
@@ -75,13 +71,43 @@ def calibrate_bags(bags, *, config_path=None, params=("tip", "lateral"), model: 
     if not records:
         raise InputError("--bench", ", ".join(map(str, bags)), "recordings with at least one steady plateau "
                          f"(≥ {detector.min_s + detector.settle_s:g} s of constant speed and pressure)")
+    out = calibrate_records(records, [str(b) for b in bags], config_path=config_path, progress=progress,
+                            **fit_options)
+    out["detector"] = detector.__dict__
+    return out
+
+
+def calibrate_map(path, *, config_path=None, progress=None, **fit_options) -> dict:
+    """Fit to the operating points of a pump's steady map (CSV, :mod:`.pump_map`; see :func:`calibrate_records`)."""
+    cfg = load_config(config_path)
+    records = read_map(path, MapLimits.from_config(cfg))
+    (progress or (lambda s: None))(f"{path}: {len(records)} operating points")
+    return calibrate_records(records, [str(path)], config_path=config_path, progress=progress, **fit_options)
+
+
+def calibrate_records(records, sources, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
+                      holdout: int = 4, jobs: int | None = None, rcond: float = 0.1,
+                      flow_floor: float = C.MODEL_FLOW_SD_REL, progress=None) -> dict:
+    """Fit ``params`` to steady operating points (plateaus of recordings or rows of a map); the whole result.
+
+    Parameters
+    ----------
+    records : list of PlateauRecord
+        The operating points (SI).
+    sources : list of str
+        The files they came from (provenance).
+    """
+    say = progress or (lambda s: None)
+    cfg = load_config(config_path)
+    raw = cfg.to_dict()
+    raw.pop("calibration", None)
     displacement = cfg.gears.displacement_closed_form()
     opts = {"rcond": rcond, "flow_floor": flow_floor}
     (out, wall) = C.run_timed(_run, records, raw, params, model, holdout, jobs, displacement, opts, say)
-    out.update({"bags": [str(b) for b in bags], "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    out.update({"bags": list(sources), "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                 "prior_config": _display_path(cfg.source), "model": model, "params": list(params), "holdout_every": holdout,
                 "wall_time_s": wall, "software": f"gerotor_twin {__version__}", "flow_floor": flow_floor,
-                "plateau_records": [r.as_dict() for r in records], "detector": detector.__dict__})
+                "plateau_records": [r.as_dict() for r in records]})
     out["config"] = apply(raw, params, np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
     return out
 
@@ -182,9 +208,17 @@ def cmd_calibrate(args) -> int:
     from ..twin.settings import oil_sensor_tau_arg
     det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
                            oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
-    res = calibrate_bags(args.bench, config_path=args.config, params=names, model=args.model,
-                         holdout=args.holdout, jobs=args.jobs, flow_floor=args.flow_floor, detector=det,
-                         progress=say)
+    fit_options = {"config_path": args.config, "params": names, "model": args.model, "holdout": args.holdout,
+                   "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say}
+    if args.map:
+        try:
+            res = calibrate_map(args.map, **fit_options)
+        except PumpMapError as exc:
+            for line in exc.lines:
+                print(f"error: {line}", file=sys.stderr)
+            return 2
+    else:
+        res = calibrate_bags(args.bench, detector=det, **fit_options)
     raw = fitted_config(res)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("# pump config fitted by `gerotor-twin calibrate` (provenance in `calibration`)\n"
@@ -193,7 +227,7 @@ def cmd_calibrate(args) -> int:
           f"{res['wall_time_s']:.1f} s)")
     print_summary(res)
     from .plateaus import thermometer_lag_note
-    note = thermometer_lag_note(res["plateau_records"], det.oil_sensor_tau_s)
+    note = None if args.map else thermometer_lag_note(res["plateau_records"], det.oil_sensor_tau_s)
     if note:
         print(note)
     if args.json:
@@ -211,9 +245,13 @@ def add_parser(sub) -> None:
                        description="Detect steady plateaus in bench recordings, fit the chosen parameters to the "
                                    "measured mean delivery flow (least squares, identifiable combinations only), "
                                    "report hold-out errors and write a pump YAML with a provenance block.")
-    p.add_argument("--bench", nargs="+", required=True, metavar="BAG", help="bench recordings (MCAP)")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--bench", nargs="+", metavar="BAG", help="bench recordings (MCAP): their steady plateaus")
+    src.add_argument("--map", metavar="FILE.csv",
+                     help="a pump's steady map: speed, delivery pressure, oil temperature, flow or η_v, units in "
+                          "the header (example: config/maps/example_map.csv)")
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
-    p.add_argument("--params", default="tip,lateral", help="comma list of tip, lateral, cd, tip_dh (default tip,lateral)")
+    p.add_argument("--params", default="tip,lateral", help="comma list of tip, lateral, cd, tip_dh, displacement (default tip,lateral)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4, help="hold out every k-th plateau of each bag (0: none; default 4)")
