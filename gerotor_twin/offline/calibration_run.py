@@ -174,6 +174,8 @@ def print_summary(result: dict, out=None) -> None:
     for a, b in f["unseparable"]:
         print(f"  the data cannot separate {a} and {b}: fitted their combination, their ratio kept at the prior",
               file=out)
+    if f["insensitive"]:
+        print(f"  kept at the prior (the data do not see them): {', '.join(f['insensitive'])}", file=out)
     for c in f["combinations"]:
         print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}"
               f"..{c['factor_ci95'][1]:.4f})", file=out)

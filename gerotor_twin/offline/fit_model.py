@@ -13,7 +13,13 @@ tip        clearances.tooth_tip_m        tooth-tip leakage (≈ δ³ Poiseuille 
 lateral    clearances.lateral_m          lateral, suction–delivery and drain leakage (≈ s³)
 cd         orifice.cd_max                port orifices (filling at high speed)
 tip_dh     leakage.tip_dh                equivalent length of the tooth-tip gap
+displace-  volumetric.displacement_      effective displacement k_D: a flow deficit
+ment       factor                        (1 − k_D)·D·n at every pressure and speed
 =========  ============================  ===========================================
+
+Each starts at its prior, the value of the pump config given (``displacement``: 1, the ideal
+profiles, unless the config says otherwise), and is fitted only when the identifiability
+analysis finds the data determine it (:mod:`.identifiability`); otherwise it stays there.
 """
 from __future__ import annotations
 
@@ -48,6 +54,8 @@ PARAMETERS = {p.name: p for p in (
     FitParameter("lateral", "clearances", "lateral_m", 1e-6, 4.9e-4, "m", "lateral clearance per face"),
     FitParameter("cd", "orifice", "cd_max", 0.1, 1.0, "-", "turbulent discharge coefficient of the ports"),
     FitParameter("tip_dh", "leakage", "tip_dh", 0.01, 10.0, "-", "dh of the tooth-tip gap's equivalent length"),
+    FitParameter("displacement", "volumetric", "displacement_factor", 0.5, 1.1, "-",
+                 "effective displacement / ideal profiles' (filling, tolerances)"),
 )}
 
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gerotor_twin.model.pump import PumpState
+from gerotor_twin.model.volumetric import displacement_deficit
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.outputs import OutputMessage
 
@@ -79,17 +80,20 @@ class Revolution:
             self.p = [np.concatenate(self.p)[::2]]
             self.rows = len(self.theta[0])
 
-    def flow_summary(self, end: PumpState, displacement: float) -> tuple[float, float, float, float] | None:
+    def flow_summary(self, end: PumpState, displacement: float,
+                     displacement_factor: float = 1.0) -> tuple[float, float, float, float] | None:
         """(mean delivery [m³/s], theoretical [m³/s], leakage [m³/s], volumetric efficiency [-]) up to ``end``.
 
-        ``displacement`` is the volume per revolution [m³]; None for a revolution of zero duration.
+        ``displacement`` is the volume per revolution [m³]; ``displacement_factor`` the effective displacement
+        k_D [-] (:mod:`gerotor_twin.model.volumetric`: the delivery less (1 − k_D)·displacement per
+        revolution); None for a revolution of zero duration.
         """
         T = end.t - self.t0
         if not T > 0:
             return None
-        dv = float(end.volumes[0] - self.vol0)
-        q, qth = dv / T, displacement / T
-        return q, qth, qth - q, dv / displacement
+        qth = displacement / T
+        q = float(end.volumes[0] - self.vol0) / T - displacement_deficit(_TWO_PI / T, displacement, displacement_factor)
+        return q, qth, qth - q, q / qth
 
     def waveform_table(self, samples: int) -> np.ndarray | None:
         """Columns: angle [rad] on ``samples`` equal steps of one turn, then the N chamber pressures [Pa].
@@ -122,11 +126,15 @@ class RevolutionRecorder:
         A waveform every this many completed revolutions (0 = never).
     waveform_samples : int
         Angles of a waveform over one revolution.
+    displacement_factor : float
+        Effective displacement k_D [-] (:mod:`gerotor_twin.model.volumetric`).
     """
 
-    def __init__(self, n_chambers: int, displacement: float, waveform_every: int, waveform_samples: int):
+    def __init__(self, n_chambers: int, displacement: float, waveform_every: int, waveform_samples: int,
+                 displacement_factor: float = 1.0):
         self.N = n_chambers
         self.displacement = displacement
+        self.displacement_factor = displacement_factor
         self.waveform_every = waveform_every
         self.waveform_samples = waveform_samples
         self.current: Revolution | None = None
@@ -149,7 +157,7 @@ class RevolutionRecorder:
         r = self.current
         msgs: list[OutputMessage] = []
         if r is not None:
-            vals = r.flow_summary(st, self.displacement)
+            vals = r.flow_summary(st, self.displacement, self.displacement_factor)
             if vals is not None:
                 if O.all_finite(vals):
                     msgs.extend(O.summary_messages(stamp_ns, vals))
