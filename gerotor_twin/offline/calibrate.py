@@ -121,6 +121,9 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     sig = sigmas(records, flow_floor)
     p = len(names)
     f_prior = ev.flows(names, [np.zeros(p)], records)[0]
+    if p == 0:          # the prior itself: nothing to fit
+        return FitResult((), np.zeros(0), np.zeros((0, 0)), ident.analyse(np.zeros((len(records), 0)), (), rcond),
+                         (f_prior - q) / sig, f_prior, f_prior, math.nan, len(records), 0)
     analysis = ident.analyse(_jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond)
     basis = analysis["basis"]
     say(f"  identifiable directions: {len(analysis['kept'])} of {p}")

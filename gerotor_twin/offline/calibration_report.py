@@ -50,6 +50,24 @@ def _scaled(v: float, unit: str) -> str:
     return f"{v * 1e6:.3f} µm" if unit == "m" else f"{v:.4f}"
 
 
+def _selection(sel: dict | None) -> str:
+    """The candidate sets' fit and held-out errors, the choice and the empirical baseline ('' without selection)."""
+    if not sel:
+        return ""
+    rows = [["+".join(c["params"]) or "prior (nothing fitted)", f"{100 * c['fit_rmse']:.2f}",
+             f"{100 * c['cv_rmse']:.2f} ± {100 * c['cv_rmse_se']:.2f}", f"{100 * c['cv_max_abs']:.2f}"]
+            for c in sel["candidates"]]
+    b = sel["baseline"]
+    rows.append([f"empirical {b['law']}", f"{100 * b['fit_rmse']:.2f}", f"{100 * b['cv_rmse']:.2f}",
+                 f"{100 * b['cv_max_abs']:.2f}"])
+    verdict = ("<p><b>The empirical law predicts the held-out points better than the twin.</b></p>"
+               if sel["baseline_better"] else "")
+    return (f"<h2>Parameter set (leave one {html.escape(sel['cv'])} out, {len(sel['folds'])} folds)</h2>"
+            + _table(["set", "fit RMSE [pt]", "held-out RMSE [pt]", "held-out max [pt]"], rows)
+            + f"<p>Chosen: {html.escape(sel['reason'])}; a predicted η_v holds ± "
+              f"{100 * sel['prediction_band_eta']:.2f} pt (95 %, from the held-out errors).</p>{verdict}")
+
+
 def write_report(result: dict, path) -> Path:
     """Write the page; returns its path."""
     f = result["fit"]
@@ -78,7 +96,7 @@ td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}</style></head><b
 <h1>Calibration from bench recordings or a steady map</h1>
 <p>Data: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
 {html.escape(result['model'])}; {len(result['plateau_records'])} plateaus; {result['date']}; {html.escape(result['software'])}.</p>
-{params}{combos}{notes}{hold}
+{params}{combos}{notes}{hold}{_selection(result.get("selection"))}
 <img alt="efficiency error per plateau" src="data:image/png;base64,{_figure(result)}">
 {plateaus}
 <p>Residual variance factor s² = {f['residual_variance_factor']:.3g} (intervals are widened by √s² when the

@@ -12,6 +12,7 @@ import datetime as _dt
 import json
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -24,9 +25,13 @@ from ..units import m3s_to_lpm
 from . import calibrate as C
 from .fit_model import apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus
+from . import selection as S
 from .pump_map import MapLimits, PumpMapError, read_map
 
-__all__ = ["calibrate_bags", "fitted_config", "cmd_calibrate", "add_parser"]
+#: what ``--map`` fits by default (the largest candidate set): the gaps' common factor and the displacement
+MAP_PARAMS = ("tip", "lateral", "displacement")
+
+__all__ = ["calibrate_bags", "calibrate_map", "calibrate_records", "MAP_PARAMS", "fitted_config", "cmd_calibrate", "add_parser"]
 
 
 def _fit_summary(fr: C.FitResult, raw: dict, records, displacement: float) -> dict:
@@ -77,18 +82,22 @@ def calibrate_bags(bags, *, config_path=None, detector: DetectorSettings = Detec
     return out
 
 
-def calibrate_map(path, *, config_path=None, progress=None, **fit_options) -> dict:
-    """Fit to the operating points of a pump's steady map (CSV, :mod:`.pump_map`; see :func:`calibrate_records`)."""
+def calibrate_map(path, *, config_path=None, progress=None, params=MAP_PARAMS, cv: str = "auto",
+                  **fit_options) -> dict:
+    """Fit to the operating points of a pump's steady map (CSV, :mod:`.pump_map`; see :func:`calibrate_records`);
+    by default the parameter set is chosen by cross-validation among the subsets of :data:`MAP_PARAMS`."""
     cfg = load_config(config_path)
     records = read_map(path, MapLimits.from_config(cfg))
     (progress or (lambda s: None))(f"{path}: {len(records)} operating points")
-    return calibrate_records(records, [str(path)], config_path=config_path, progress=progress, **fit_options)
+    return calibrate_records(records, [str(path)], config_path=config_path, progress=progress, params=params,
+                             cv=cv, **fit_options)
 
 
 def calibrate_records(records, sources, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
                       holdout: int = 4, jobs: int | None = None, rcond: float = 0.1,
-                      flow_floor: float = C.MODEL_FLOW_SD_REL, progress=None) -> dict:
-    """Fit ``params`` to steady operating points (plateaus of recordings or rows of a map); the whole result.
+                      flow_floor: float = C.MODEL_FLOW_SD_REL, cv: str = "none", candidates=None,
+                      progress=None) -> dict:
+    """Fit steady operating points (plateaus of recordings or rows of a map); the whole result.
 
     Parameters
     ----------
@@ -96,6 +105,15 @@ def calibrate_records(records, sources, *, config_path=None, params=("tip", "lat
         The operating points (SI).
     sources : list of str
         The files they came from (provenance).
+    params : tuple of str
+        The parameters to fit (``cv="none"``), or the largest candidate set (see ``candidates``).
+    holdout : int
+        ``cv="none"`` only: every k-th point held out, fitted on the others (0: none).
+    cv : str
+        ``"none"``: fit ``params``; ``"speed"`` / ``"point"`` / ``"auto"`` (speed when there are two or
+        more): choose among candidate sets by that cross-validation (:mod:`.selection`).
+    candidates : sequence of tuple of str, optional
+        The candidate sets (the prior is always one); default :func:`.selection.candidate_sets` of ``params``.
     """
     say = progress or (lambda s: None)
     cfg = load_config(config_path)
@@ -103,13 +121,25 @@ def calibrate_records(records, sources, *, config_path=None, params=("tip", "lat
     raw.pop("calibration", None)
     displacement = cfg.gears.displacement_closed_form()
     opts = {"rcond": rcond, "flow_floor": flow_floor}
-    (out, wall) = C.run_timed(_run, records, raw, params, model, holdout, jobs, displacement, opts, say)
+    plan = FitPlan(tuple(params), model, holdout, S.resolve_scheme(cv, records),
+                   None if candidates is None else tuple(tuple(c) for c in candidates))
+    (out, wall) = C.run_timed(_run, records, raw, plan, jobs, displacement, opts, say)
     out.update({"bags": list(sources), "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-                "prior_config": _display_path(cfg.source), "model": model, "params": list(params), "holdout_every": holdout,
+                "prior_config": _display_path(cfg.source), "model": model, "holdout_every": holdout,
                 "wall_time_s": wall, "software": f"gerotor_twin {__version__}", "flow_floor": flow_floor,
                 "plateau_records": [r.as_dict() for r in records]})
-    out["config"] = apply(raw, params, np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
+    out["config"] = apply(raw, out["params"], np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
     return out
+
+
+@dataclass(frozen=True)
+class FitPlan:
+    """What a calibration run fits and how it judges the result."""
+    params: tuple[str, ...]      #: parameters fitted (``cv`` none) or the largest candidate set
+    model: str                   #: outer-gear model of the twin
+    holdout: int                 #: ``cv`` none: every k-th point held out (0: none)
+    cv: str                      #: "none" | "speed" | "point"
+    candidates: tuple | None     #: candidate sets; None: :func:`.selection.candidate_sets` of ``params``
 
 
 def _display_path(path) -> str:
@@ -120,14 +150,37 @@ def _display_path(path) -> str:
         return str(path)
 
 
-def _run(records, raw, params, model, holdout, jobs, displacement, opts, say) -> dict:
-    train, held = C.split_holdout(records, holdout)
-    with C.Evaluator(raw, model, jobs, progress=say) as ev:
-        ho = _holdout(ev, params, train, held, raw, displacement, opts, say) if held else None
-        say(f"final fit on all {len(records)} plateaus")
-        fr = C.fit(ev, params, records, **opts, progress=say)
-        return {"holdout": ho, "fit": _fit_summary(fr, raw, records, displacement),
-                "simulations": ev.simulated, "jobs": ev.jobs}
+def _run(records, raw, plan: FitPlan, jobs, displacement, opts, say) -> dict:
+    with C.Evaluator(raw, plan.model, jobs, progress=say) as ev:
+        if plan.cv == "none":
+            train, held = C.split_holdout(records, plan.holdout)
+            ho = _holdout(ev, plan.params, train, held, raw, displacement, opts, say) if held else None
+            say(f"final fit on all {len(records)} plateaus")
+            sel, fr = None, C.fit(ev, plan.params, records, **opts, progress=say)
+        else:
+            ho = None
+            sel, fr = _select(ev, records, raw, plan, displacement, opts, say)
+        return {"holdout": ho, "selection": sel, "params": list(fr.names),
+                "fit": _fit_summary(fr, raw, records, displacement), "simulations": ev.simulated, "jobs": ev.jobs}
+
+
+def _select(ev, records, raw, plan: FitPlan, displacement, opts, say) -> tuple[dict, C.FitResult]:
+    """Cross-validate every candidate set, choose one (:func:`.selection.choose`), fit the empirical baseline."""
+    fold_index = S.folds(records, plan.cv)
+    say(f"cross-validation: leave one {plan.cv} out, {len(fold_index)} folds")
+    sets = plan.candidates if plan.candidates is not None else S.candidate_sets(plan.params)
+    sets = ([()] if () not in sets else []) + list(sets)
+    runs = [S.cross_validate(ev, names, records, fold_index, displacement, opts, say) for names in sets]
+    qth = np.array([displacement * r.omega / (2 * math.pi) for r in records])
+    noise = float(np.sqrt(np.mean((C.sigmas(records, opts["flow_floor"]) / qth) ** 2)))
+    pick, why = S.choose([c for c, _ in runs], noise)
+    fr = next(f for c, f in runs if c is pick)
+    base = S.baseline(records, fold_index, displacement, raw["boundary"]["suction_pressure_pa"])
+    return {"cv": plan.cv, "folds": [[records[i].label() for i in f] for f in fold_index],
+            "candidates": [c.summary() for c, _ in runs], "chosen": list(pick.names), "reason": why,
+            "eta_noise": noise, "cv_rmse": pick.cv_rmse, "cv_max_abs": float(np.abs(pick.cv_errors).max()),
+            "prediction_band_eta": S.prediction_band(pick), "baseline": base,
+            "baseline_better": bool(base["cv_rmse"] < pick.cv_rmse)}, fr
 
 
 def provenance(result: dict) -> dict:
@@ -146,6 +199,14 @@ def provenance(result: dict) -> dict:
              "residuals": {"flow_rmse_m3s": f["flow_error_m3s"]["rmse"], "eta_rmse": f["eta_error"]["rmse"],
                            "eta_max_abs": f["eta_error"]["max_abs"],
                            "eta_rmse_prior": f["eta_error_prior"]["rmse"]}}
+    sel = result.get("selection")
+    if sel:
+        block["selection"] = {"cv": sel["cv"], "chosen": sel["chosen"], "reason": sel["reason"],
+                              "cv_rmse": sel["cv_rmse"], "prediction_band_eta": sel["prediction_band_eta"],
+                              "candidates": [{"params": c["params"], "fit_rmse": c["fit_rmse"], "cv_rmse": c["cv_rmse"]}
+                                             for c in sel["candidates"]],
+                              "baseline": {k: sel["baseline"][k] for k in ("law", "a", "b_per_pa_s", "fit_rmse", "cv_rmse")},
+                              "baseline_better": sel["baseline_better"]}
     if ho:
         block["holdout"] = {"held_out": ho["held_out"], "eta_max_abs": ho["eta_error"]["max_abs"],
                             "eta_max_abs_prior": ho["eta_error_prior"]["max_abs"]}
@@ -184,10 +245,31 @@ def print_summary(result: dict, out=None) -> None:
           f"RMSE {100 * e0['rmse']:.2f} → {100 * e['rmse']:.2f} pt; flow RMSE "
           f"{m3s_to_lpm(f['flow_error_prior_m3s']['rmse']):.3f} → {m3s_to_lpm(f['flow_error_m3s']['rmse']):.3f} L/min",
           file=out)
+    if result.get("selection"):
+        print_selection(result["selection"], out)
     ho = result["holdout"]
     if ho:
         print(f"  hold-out ({len(ho['held_out'])} plateaus, fitted on the other {len(ho['train'])}): |η error| max "
               f"{100 * ho['eta_error_prior']['max_abs']:.2f} → {100 * ho['eta_error']['max_abs']:.2f} pt", file=out)
+
+
+def print_selection(sel: dict, out=None) -> None:
+    """The candidate sets' fit and held-out errors side by side, the choice, the band and the baseline."""
+    out = out or sys.stdout
+    print(f"  parameter sets (η_v error, leave one {sel['cv']} out, {len(sel['folds'])} folds):", file=out)
+    print(f"    {'set':28s} {'fit RMSE':>9s} {'held-out RMSE':>14s} {'held-out max':>13s}  [pt]", file=out)
+    rows = [("+".join(c["params"]) or "prior (nothing fitted)", c) for c in sel["candidates"]]
+    rows.append((f"empirical {sel['baseline']['law']}", sel["baseline"]))
+    for name, c in rows:
+        se = f" ± {100 * c['cv_rmse_se']:.2f}" if "cv_rmse_se" in c else ""
+        print(f"    {name:28s} {100 * c['fit_rmse']:9.2f} {100 * c['cv_rmse']:7.2f}{se:>7s} "
+              f"{100 * c['cv_max_abs']:13.2f}", file=out)
+    print(f"  chosen: {sel['reason']}; a predicted η_v holds ± {100 * sel['prediction_band_eta']:.2f} pt "
+          f"(95 %, from the held-out errors)", file=out)
+    b = sel["baseline"]
+    if sel["baseline_better"]:
+        print(f"  the empirical law predicts the held-out points better than the twin: held-out RMSE "
+              f"{100 * b['cv_rmse']:.2f} pt against {100 * sel['cv_rmse']:.2f} pt", file=out)
 
 
 def cmd_calibrate(args) -> int:
@@ -197,7 +279,10 @@ def cmd_calibrate(args) -> int:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     if args.jobs is not None and args.jobs < 1:
         raise InputError("--jobs", args.jobs, "an integer ≥ 1")
-    names = parse_params(args.params)
+    default = ",".join(MAP_PARAMS) if args.map else "tip,lateral"
+    names = parse_params(default if args.params is None else args.params)
+    cv = args.cv or ("auto" if args.map else "none")
+    candidates = None if args.candidates is None else [parse_params(c) for c in args.candidates.split(";") if c.strip()]
     from ..model.pump import BEARING_MODELS
     if args.model not in BEARING_MODELS:
         raise InputError("--model", args.model, " | ".join(BEARING_MODELS))
@@ -211,7 +296,8 @@ def cmd_calibrate(args) -> int:
     det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
                            oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
     fit_options = {"config_path": args.config, "params": names, "model": args.model, "holdout": args.holdout,
-                   "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say}
+                   "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say, "cv": cv,
+                   "candidates": candidates}
     if args.map:
         try:
             res = calibrate_map(args.map, **fit_options)
@@ -253,10 +339,19 @@ def add_parser(sub) -> None:
                      help="a pump's steady map: speed, delivery pressure, oil temperature, flow or η_v, units in "
                           "the header (example: config/maps/example_map.csv)")
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
-    p.add_argument("--params", default="tip,lateral", help="comma list of tip, lateral, cd, tip_dh, displacement (default tip,lateral)")
+    p.add_argument("--params", default=None,
+                   help="comma list of tip, lateral, cd, tip_dh, displacement: fitted (--cv none) or the largest "
+                        "candidate set (default tip,lateral; with --map tip,lateral,displacement)")
+    p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,
+                   help="choose the parameter set by cross-validation: leave one speed (or point) out; auto: speed "
+                        "when there are two speeds or more (default: auto with --map, none with --bench)")
+    p.add_argument("--candidates", default=None, metavar="SETS",
+                   help="candidate sets for --cv, ';'-separated (e.g. 'displacement;tip,lateral,displacement'); "
+                        "the prior is always one (default: every subset of --params, up to 3 parameters)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
-    p.add_argument("--holdout", type=int, default=4, help="hold out every k-th plateau of each bag (0: none; default 4)")
+    p.add_argument("--holdout", type=int, default=4,
+                   help="--cv none: hold out every k-th plateau of each bag (0: none; default 4)")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--settle-s", type=float, default=1.0, help="dropped at each plateau start [s] (default 1)")
     p.add_argument("--min-plateau-s", type=float, default=1.5, help="shortest plateau kept [s] (default 1.5)")

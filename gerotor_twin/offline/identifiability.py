@@ -36,6 +36,10 @@ def analyse(jw: np.ndarray, names, rcond: float = 0.1) -> dict:
     """
     jw = np.asarray(jw, float)
     p = jw.shape[1]
+    if p == 0:
+        return {"scale": np.zeros(0), "singular_ratios": np.zeros(0), "directions": np.zeros((0, 0)), "kept": [],
+                "basis": np.zeros((0, 0)), "groups": [], "combinations": np.zeros((0, 0)),
+                "correlation": np.zeros((0, 0)), "unseparable": [], "insensitive": [], "rcond": rcond}
     d = np.linalg.norm(jw, axis=0)
     sensitive = d > 1e-9 * max(d.max(), 1e-300)
     dd = np.where(sensitive, d, 1.0)
