@@ -61,6 +61,20 @@ def test_identifiability_closed_form():
     assert c["insensitive"] == ["b"] and c["groups"] == [["a"]]
 
 
+def test_identifiability_groups_only_alike_parameters_closed_form():
+    """Closed form: columns acting in opposite senses are not given a common factor (it would cancel): one is kept
+    at the prior; a column that is the sum of two orthogonal others (pairwise cos 0.71, a three-way degeneracy)
+    leaves two fitted and one at the prior; a linearly fitted parameter parallel to a log-factor is kept at the
+    prior rather than merged."""
+    a, b = np.array([1.0, 2.0, 3.0, 0.0]), np.array([0.0, 0.0, 0.0, 1.0])
+    anti = ident.analyse(np.column_stack([a, -1.0001 * a]), ("a", "b"))
+    assert len(anti["groups"]) == 1 and len(anti["groups"][0]) == 1 and len(anti["fixed"]) == 1
+    three = ident.analyse(np.column_stack([a, b, a / np.linalg.norm(a) + b]), ("a", "b", "c"))
+    assert len(three["fixed"]) == 1 and sorted(sum(three["groups"], []) + three["fixed"]) == ["a", "b", "c"]
+    lin = ident.analyse(np.column_stack([a, 2.0001 * a, b]), ("a", "x", "b"), linear=[False, True, False])
+    assert lin["fixed"] == ["x"] and lin["groups"] == [["a"], ["b"]]
+
+
 def test_covariance_closed_form():
     """Closed form: linear model, unit weights: cov = (JᵀJ)⁻¹ when χ²/dof ≤ 1, scaled by it otherwise."""
     j = np.array([[1.0], [1.0], [1.0], [1.0]])

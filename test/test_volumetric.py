@@ -13,7 +13,7 @@ import pytest
 
 from gerotor_twin.config import load_config, parse_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.model.volumetric import displacement_deficit
+from gerotor_twin.model.volumetric import EdgeLosses, bypass_flow, displacement_deficit
 from gerotor_twin.offline.calibration_run import calibrate_records
 from gerotor_twin.offline.map_synth import synthetic_map
 from gerotor_twin.twin.revolution import Revolution
@@ -31,18 +31,23 @@ def _raw(clearance_factor=1.0, k_d=1.0):
     return raw
 
 
-def test_deficit_closed_form():
-    """Closed form: (1 − 0.96) × 20 cm³ × 50 rev/s = 4e-5 m³/s; none at k_D = 1."""
+def test_edge_losses_closed_form():
+    """Closed form: (1 − 0.96) × 20 cm³ × 50 rev/s = 4e-5 m³/s; none at k_D = 1; an orifice of 1 mm² at
+    Δp = 8.7 bar in oil of 870 kg/m³: 1e-6 × √(2 × 8.7e5 / 870) = 1e-6 × √2000 m³/s, none below suction."""
     assert displacement_deficit(100 * math.pi, 20e-6, 0.96) == pytest.approx(4e-5)
     assert displacement_deficit(100 * math.pi, 20e-6, 1.0) == 0.0
+    assert bypass_flow(8.7e5, 1e-6, 870.0) == pytest.approx(1e-6 * math.sqrt(2000.0))
+    assert bypass_flow(-1e5, 1e-6, 870.0) == 0.0
+    edge = EdgeLosses(20e-6, 0.96, 1e-6, 870.0)
+    assert edge.flow(100 * math.pi, 8.7e5 + 1e5, 1e5) == pytest.approx(4e-5 + 1e-6 * math.sqrt(2000.0))
 
 
 def test_revolution_summary_closed_form():
-    """Closed form: over one revolution of T = 0.04 s delivering 9e-6 m³ of a 10 cm³ pump, k_D = 0.9 takes
-    1e-6 m³ (10 % of the displacement) off: mean 2e-4 m³/s, η_v 0.8, leakage 5e-5 m³/s."""
-    rev = Revolution(t0=1.0, vol0=5e-6, theta0=0.0)
+    """Closed form: over one revolution of T = 0.04 s the model delivering 9e-6 m³ of a 10 cm³ pump, 1e-6 m³
+    lost at the edge: mean 2e-4 m³/s, η_v 0.8, leakage 5e-5 m³/s."""
+    rev = Revolution(t0=1.0, vol0=5e-6, theta0=0.0, lost_m3=1e-6)
     end = SimpleNamespace(t=1.04, volumes=np.array([5e-6 + 9e-6]))
-    q, qth, leak, eta = rev.flow_summary(end, 10e-6, 0.9)
+    q, qth, leak, eta = rev.flow_summary(end, 10e-6)
     assert (q, qth, leak, eta) == pytest.approx((2e-4, 2.5e-4, 5e-5, 0.8))
 
 
@@ -82,3 +87,34 @@ def test_map_fit_recovers_deficit_and_clearances(truth_map):
     assert f["eta_error"]["max_abs"] < 1e-3
     alone = calibrate_records(truth_map, ["truth.csv"], params=("tip", "lateral"), holdout=0, jobs=1)["fit"]
     assert alone["eta_error"]["max_abs"] > 0.01
+
+
+#: a bypass of 0.5 mm² and a 3 % displacement deficit at the nominal clearances, at two oil temperatures
+BYPASS_M2, K_D_BYPASS = 0.5e-6, 0.97
+BYPASS_POINTS = [(rpm * math.pi / 30, 101325.0 + bar * 1e5, t) for rpm in (1200, 2800) for bar in (2, 8, 20)
+                 for t in (30.0, 60.0)]
+
+
+@pytest.fixture(scope="module")
+def bypass_map():
+    raw = _raw(1.0, K_D_BYPASS)
+    raw["volumetric"]["bypass_area_m2"] = BYPASS_M2
+    return synthetic_map(raw, BYPASS_POINTS, source="bypass.csv")
+
+
+def test_bypass_recovered_where_the_data_separate_it(bypass_map):
+    """Closed form (synthetic truth): the turbulent path (∝ √Δp, viscosity-free) and the gaps (∝ Δp/μ) differ
+    once the map has two oil temperatures: the analysis fits all three directions and each interval holds the
+    truth (bypass 0.5 mm², k_D 0.97, gaps' factor 1).  At one temperature √Δp is nearly a constant plus a
+    line in Δp over 2–20 bar, so the analysis keeps the bypass at its prior (0) instead."""
+    res = calibrate_records(bypass_map, ["bypass.csv"], params=("tip", "lateral", "displacement", "bypass"),
+                            holdout=0, jobs=1)
+    by = {p["name"]: p for p in res["fit"]["parameters"]}
+    assert by["bypass"]["identifiable"] and by["bypass"]["ci95"][0] <= BYPASS_M2 <= by["bypass"]["ci95"][1]
+    assert by["displacement"]["ci95"][0] <= K_D_BYPASS <= by["displacement"]["ci95"][1]
+    gaps = next(c for c in res["fit"]["combinations"] if abs(c["coefficients"]["lateral"]) > 0)
+    assert gaps["factor_ci95"][0] <= 1.0 <= gaps["factor_ci95"][1]
+    one_t = [r for r in bypass_map if r.oil_temperature_c == 30.0]
+    f1 = calibrate_records(one_t, ["bypass.csv"], params=("tip", "lateral", "displacement", "bypass"),
+                           holdout=0, jobs=1)["fit"]
+    assert "bypass" in f1["fixed"] and next(p for p in f1["parameters"] if p["name"] == "bypass")["value"] == 0.0

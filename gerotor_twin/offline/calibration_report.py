@@ -47,7 +47,7 @@ def _table(head: list[str], rows: list[list]) -> str:
 
 
 def _scaled(v: float, unit: str) -> str:
-    return f"{v * 1e6:.3f} µm" if unit == "m" else f"{v:.4f}"
+    return {"m": f"{v * 1e6:.3f} µm", "m²": f"{v * 1e6:.4f} mm²"}.get(unit, f"{v:.4f}")
 
 
 def _selection(sel: dict | None) -> str:
@@ -77,7 +77,7 @@ def write_report(result: dict, path) -> Path:
                       "yes" if p["identifiable"] else "no (common factor of its group)"] for p in f["parameters"]])
     combos = _table(["identifiable combination", "factor", "95 % CI"],
                     [[c["label"], f"{c['factor']:.4f}", f"{c['factor_ci95'][0]:.4f} … {c['factor_ci95'][1]:.4f}"]
-                     for c in f["combinations"]])
+                     for c in f["combinations"] if not c.get("linear")])
     rows = [[r["plateau"], f"{r['rpm']:.0f}", f"{(r['p_delivery_pa'] - 101325) / 1e5:.2f}",
              f"{m3s_to_lpm(r['flow_measured_m3s']):.3f}", f"{m3s_to_lpm(r0['flow_model_m3s']):.3f}",
              f"{m3s_to_lpm(r['flow_model_m3s']):.3f}", f"{100 * r0['eta_error']:+.2f}", f"{100 * r['eta_error']:+.2f}"]

@@ -28,8 +28,11 @@ from .plateaus import DetectorSettings, bench_plateaus
 from . import selection as S
 from .pump_map import MapLimits, PumpMapError, read_map
 
-#: what ``--map`` fits by default (the largest candidate set): the gaps' common factor and the displacement
-MAP_PARAMS = ("tip", "lateral", "displacement")
+#: what ``--map`` may fit by default: the gaps, the effective displacement and the bypass path
+MAP_PARAMS = ("tip", "lateral", "displacement", "bypass")
+#: the candidate sets ``--map`` compares by default (the prior besides): each loss alone and with the gaps
+MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"),
+                  ("tip", "lateral", "bypass"), ("tip", "lateral", "displacement", "bypass"))
 
 __all__ = ["calibrate_bags", "calibrate_map", "calibrate_records", "MAP_PARAMS", "fitted_config", "cmd_calibrate", "add_parser"]
 
@@ -40,7 +43,7 @@ def _fit_summary(fr: C.FitResult, raw: dict, records, displacement: float) -> di
     a = fr.analysis
     return {"parameters": C.parameter_table(fr, raw), "combinations": C.combinations(fr),
             "groups": a["groups"], "unseparable": [list(p) for p in a["unseparable"]],
-            "insensitive": a["insensitive"], "correlation_at_prior": _nan_none(a["correlation"]),
+            "insensitive": a["insensitive"], "fixed": a["fixed"], "correlation_at_prior": _nan_none(a["correlation"]),
             "singular_ratios": a["singular_ratios"].tolist(), "rcond": a["rcond"],
             "residual_variance_factor": fr.s2, "dof": fr.dof, "function_evaluations": fr.iterations,
             "plateaus": fitted, "plateaus_prior": prior,
@@ -83,14 +86,14 @@ def calibrate_bags(bags, *, config_path=None, detector: DetectorSettings = Detec
 
 
 def calibrate_map(path, *, config_path=None, progress=None, params=MAP_PARAMS, cv: str = "auto",
-                  **fit_options) -> dict:
+                  candidates=MAP_CANDIDATES, **fit_options) -> dict:
     """Fit to the operating points of a pump's steady map (CSV, :mod:`.pump_map`; see :func:`calibrate_records`);
-    by default the parameter set is chosen by cross-validation among the subsets of :data:`MAP_PARAMS`."""
+    by default the parameter set is chosen by cross-validation among :data:`MAP_CANDIDATES`."""
     cfg = load_config(config_path)
     records = read_map(path, MapLimits.from_config(cfg))
     (progress or (lambda s: None))(f"{path}: {len(records)} operating points")
     return calibrate_records(records, [str(path)], config_path=config_path, progress=progress, params=params,
-                             cv=cv, **fit_options)
+                             cv=cv, candidates=candidates, **fit_options)
 
 
 def calibrate_records(records, sources, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
@@ -221,23 +224,29 @@ def fitted_config(result: dict) -> dict:
     return raw
 
 
+#: unit of a fitted parameter → (scale, unit) it is printed in
+DISPLAY_UNITS = {"m": (1e6, "µm"), "m²": (1e6, "mm²")}
+
+
 def print_summary(result: dict, out=None) -> None:
     """The figures a bench engineer looks at first."""
     out = out or sys.stdout
     f = result["fit"]
+    kept = set(f["insensitive"]) | set(f.get("fixed", []))
     for p in f["parameters"]:
-        u = 1e6 if p["unit"] == "m" else 1.0
-        unit = "µm" if p["unit"] == "m" else ""
-        print(f"  {p['name']:8s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:2s}  95 % CI "
-              f"[{p['ci95'][0] * u:.3f}, {p['ci95'][1] * u:.3f}]"
-              f"{'' if p['identifiable'] else '  (not separately identifiable: common factor of its group)'}",
-              file=out)
+        u, unit = DISPLAY_UNITS.get(p["unit"], (1.0, ""))
+        note = ("" if p["identifiable"] else "  (kept at the prior)" if p["name"] in kept
+                else "  (not separately identifiable: common factor of its group)")
+        print(f"  {p['name']:12s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:3s}  95 % CI "
+              f"[{p['ci95'][0] * u:.3f}, {p['ci95'][1] * u:.3f}]{note}", file=out)
     for a, b in f["unseparable"]:
         print(f"  the data cannot separate {a} and {b}: fitted their combination, their ratio kept at the prior",
               file=out)
     if f["insensitive"]:
         print(f"  kept at the prior (the data do not see them): {', '.join(f['insensitive'])}", file=out)
-    for c in f["combinations"]:
+    if f.get("fixed"):
+        print(f"  kept at the prior (the data confuse them with the others): {', '.join(f['fixed'])}", file=out)
+    for c in (c for c in f["combinations"] if not c.get("linear")):
         print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}"
               f"..{c['factor_ci95'][1]:.4f})", file=out)
     e, e0 = f["eta_error"], f["eta_error_prior"]
@@ -257,12 +266,12 @@ def print_selection(sel: dict, out=None) -> None:
     """The candidate sets' fit and held-out errors side by side, the choice, the band and the baseline."""
     out = out or sys.stdout
     print(f"  parameter sets (η_v error, leave one {sel['cv']} out, {len(sel['folds'])} folds):", file=out)
-    print(f"    {'set':28s} {'fit RMSE':>9s} {'held-out RMSE':>14s} {'held-out max':>13s}  [pt]", file=out)
+    print(f"    {'set':34s} {'fit RMSE':>9s} {'held-out RMSE':>14s} {'held-out max':>13s}  [pt]", file=out)
     rows = [("+".join(c["params"]) or "prior (nothing fitted)", c) for c in sel["candidates"]]
     rows.append((f"empirical {sel['baseline']['law']}", sel["baseline"]))
     for name, c in rows:
         se = f" ± {100 * c['cv_rmse_se']:.2f}" if "cv_rmse_se" in c else ""
-        print(f"    {name:28s} {100 * c['fit_rmse']:9.2f} {100 * c['cv_rmse']:7.2f}{se:>7s} "
+        print(f"    {name:34s} {100 * c['fit_rmse']:9.2f} {100 * c['cv_rmse']:7.2f}{se:>7s} "
               f"{100 * c['cv_max_abs']:13.2f}", file=out)
     print(f"  chosen: {sel['reason']}; a predicted η_v holds ± {100 * sel['prediction_band_eta']:.2f} pt "
           f"(95 %, from the held-out errors)", file=out)
@@ -270,6 +279,14 @@ def print_selection(sel: dict, out=None) -> None:
     if sel["baseline_better"]:
         print(f"  the empirical law predicts the held-out points better than the twin: held-out RMSE "
               f"{100 * b['cv_rmse']:.2f} pt against {100 * sel['cv_rmse']:.2f} pt", file=out)
+
+
+def _candidates(args):
+    """The candidate sets of the command line: ``--candidates``, else :data:`MAP_CANDIDATES` for a map without
+    ``--params``, else None (the subsets of ``--params``)."""
+    if args.candidates is not None:
+        return [parse_params(c) for c in args.candidates.split(";") if c.strip()]
+    return MAP_CANDIDATES if args.map and args.params is None else None
 
 
 def cmd_calibrate(args) -> int:
@@ -282,7 +299,7 @@ def cmd_calibrate(args) -> int:
     default = ",".join(MAP_PARAMS) if args.map else "tip,lateral"
     names = parse_params(default if args.params is None else args.params)
     cv = args.cv or ("auto" if args.map else "none")
-    candidates = None if args.candidates is None else [parse_params(c) for c in args.candidates.split(";") if c.strip()]
+    candidates = _candidates(args)
     from ..model.pump import BEARING_MODELS
     if args.model not in BEARING_MODELS:
         raise InputError("--model", args.model, " | ".join(BEARING_MODELS))
@@ -341,13 +358,15 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
     p.add_argument("--params", default=None,
                    help="comma list of tip, lateral, cd, tip_dh, displacement: fitted (--cv none) or the largest "
-                        "candidate set (default tip,lateral; with --map tip,lateral,displacement)")
+                        "candidate set (default tip,lateral; with --map tip,lateral,displacement,bypass)")
     p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,
                    help="choose the parameter set by cross-validation: leave one speed (or point) out; auto: speed "
                         "when there are two speeds or more (default: auto with --map, none with --bench)")
     p.add_argument("--candidates", default=None, metavar="SETS",
                    help="candidate sets for --cv, ';'-separated (e.g. 'displacement;tip,lateral,displacement'); "
-                        "the prior is always one (default: every subset of --params, up to 3 parameters)")
+                        "the prior is always one (default with --map and no --params: the gaps, the displacement, "
+                        "the gaps with each of displacement and bypass, and all four; else every subset of "
+                        "--params up to 3 parameters, their prefixes beyond)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4,

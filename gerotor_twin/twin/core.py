@@ -145,8 +145,7 @@ class TwinCore:
         self._timer = timer
         self._events = EventLog(int(s.error_report_period_s * NS))
         self.book = InputBook(model, s, self._events)
-        self.recorder = RevolutionRecorder(model.N, model.displacement, s.waveform_every, s.waveform_samples,
-                                           model.config.displacement_factor)
+        self.recorder = RevolutionRecorder(model.N, model.displacement, s.waveform_every, s.waveform_samples)
         self.driver = ClockDriver(model, s, self.book, self.recorder, self._events)
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": {}}
         self._last_tick: TickResult | None = None

@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gerotor_twin.model.pump import PumpState
-from gerotor_twin.model.volumetric import displacement_deficit
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.outputs import OutputMessage
 
@@ -56,6 +55,8 @@ class Revolution:
         Chamber pressures [Pa], one ``(rows, N)`` array per recorded advance.
     rows : int
         Rows recorded so far.
+    lost_m3 : float
+        Volume lost at the edge of the model since the start [m³] (:mod:`gerotor_twin.model.volumetric`).
     """
     t0: float
     vol0: float
@@ -63,6 +64,7 @@ class Revolution:
     theta: list = field(default_factory=list)
     p: list = field(default_factory=list)
     rows: int = 0
+    lost_m3: float = 0.0
 
     @classmethod
     def start(cls, st: PumpState, n: int) -> "Revolution":
@@ -80,20 +82,19 @@ class Revolution:
             self.p = [np.concatenate(self.p)[::2]]
             self.rows = len(self.theta[0])
 
-    def flow_summary(self, end: PumpState, displacement: float,
-                     displacement_factor: float = 1.0) -> tuple[float, float, float, float] | None:
+    def flow_summary(self, end: PumpState, displacement: float) -> tuple[float, float, float, float] | None:
         """(mean delivery [m³/s], theoretical [m³/s], leakage [m³/s], volumetric efficiency [-]) up to ``end``.
 
-        ``displacement`` is the volume per revolution [m³]; ``displacement_factor`` the effective displacement
-        k_D [-] (:mod:`gerotor_twin.model.volumetric`: the delivery less (1 − k_D)·displacement per
-        revolution); None for a revolution of zero duration.
+        ``displacement`` is the volume per revolution [m³]; the delivered volume is the model's less
+        :attr:`lost_m3` (the edge losses, :mod:`gerotor_twin.model.volumetric`); None for a revolution of
+        zero duration.
         """
         T = end.t - self.t0
         if not T > 0:
             return None
-        qth = displacement / T
-        q = float(end.volumes[0] - self.vol0) / T - displacement_deficit(_TWO_PI / T, displacement, displacement_factor)
-        return q, qth, qth - q, q / qth
+        dv = float(end.volumes[0] - self.vol0) - self.lost_m3
+        q, qth = dv / T, displacement / T
+        return q, qth, qth - q, dv / displacement
 
     def waveform_table(self, samples: int) -> np.ndarray | None:
         """Columns: angle [rad] on ``samples`` equal steps of one turn, then the N chamber pressures [Pa].
@@ -126,15 +127,11 @@ class RevolutionRecorder:
         A waveform every this many completed revolutions (0 = never).
     waveform_samples : int
         Angles of a waveform over one revolution.
-    displacement_factor : float
-        Effective displacement k_D [-] (:mod:`gerotor_twin.model.volumetric`).
     """
 
-    def __init__(self, n_chambers: int, displacement: float, waveform_every: int, waveform_samples: int,
-                 displacement_factor: float = 1.0):
+    def __init__(self, n_chambers: int, displacement: float, waveform_every: int, waveform_samples: int):
         self.N = n_chambers
         self.displacement = displacement
-        self.displacement_factor = displacement_factor
         self.waveform_every = waveform_every
         self.waveform_samples = waveform_samples
         self.current: Revolution | None = None
@@ -147,6 +144,11 @@ class RevolutionRecorder:
         """Forget the revolution in progress (no summary for it)."""
         self.current = None
 
+    def add_loss(self, volume_m3: float) -> None:
+        """Volume lost at the edge of the model [m³] during the last advance (none without a revolution)."""
+        if self.current is not None:
+            self.current.lost_m3 += volume_m3
+
     def record(self, out) -> None:
         """Append the rows of a solver output (``theta`` [rad], ``chamber_pressures`` [Pa])."""
         if self.current is not None:
@@ -157,7 +159,7 @@ class RevolutionRecorder:
         r = self.current
         msgs: list[OutputMessage] = []
         if r is not None:
-            vals = r.flow_summary(st, self.displacement, self.displacement_factor)
+            vals = r.flow_summary(st, self.displacement)
             if vals is not None:
                 if O.all_finite(vals):
                     msgs.extend(O.summary_messages(stamp_ns, vals))
