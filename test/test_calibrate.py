@@ -15,10 +15,10 @@ from gerotor_twin.bench_emulator.profiles import Profile, Segment
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.offline import identifiability as ident
-from gerotor_twin.offline.calibration_run import calibrate_bags, fitted_config
-from gerotor_twin.offline.fit_model import parse_params
-from gerotor_twin.offline.plateaus import DetectorSettings, bench_plateaus
+from gerotor_twin.calibration import identifiability as ident
+from gerotor_twin.calibration.command import calibrate_bags, fitted_config
+from gerotor_twin.calibration.fit_model import parse_params
+from gerotor_twin.calibration.plateaus import DetectorSettings, bench_plateaus
 
 #: five plateaus over speed and pressure, 3.6 s each, joined by 0.4 s ramps (19.6 s)
 PROFILE = Profile("calib-test", (
@@ -159,7 +159,7 @@ def test_written_config_loads_and_reproduces(fits, tmp_path):
 def test_thermometer_lag_note():
     """Behaviour: a note names the fastest oil drift on the plateaus and the reading lag it makes (closed
     form τ × slope) when no lag is set; nothing when the oil is steady, the slope unknown or a lag set."""
-    from gerotor_twin.offline.plateaus import OIL_DRIFT_NOTE_K_S, thermometer_lag_note
+    from gerotor_twin.calibration.plateaus import OIL_DRIFT_NOTE_K_S, thermometer_lag_note
     recs = [{"oil_slope_k_s": 0.1}, {"oil_slope_k_s": -0.25}, {"oil_slope_k_s": float("nan")}]
     note = thermometer_lag_note(recs, 0.0)
     assert "0.25 K/s" in note and "(3 s: 0.8 K)" in note and "--oil-sensor-tau" in note

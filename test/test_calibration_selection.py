@@ -13,10 +13,10 @@ from scipy.stats import t as student_t
 
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
-from gerotor_twin.offline import selection as S
-from gerotor_twin.offline.calibration_run import calibrate_records
-from gerotor_twin.offline.map_synth import synthetic_map
-from gerotor_twin.offline.plateaus import PlateauRecord
+from gerotor_twin.calibration import selection as S
+from gerotor_twin.calibration.command import calibrate_records
+from gerotor_twin.calibration.map_synth import synthetic_map
+from gerotor_twin.calibration.plateaus import PlateauRecord
 
 P_ATM = 101325.0
 

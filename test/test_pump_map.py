@@ -11,7 +11,7 @@ import pytest
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.offline.pump_map import MapLimits, PumpMapError, read_map
+from gerotor_twin.calibration.pump_map import MapLimits, PumpMapError, read_map
 from gerotor_twin.resources import resource_path
 
 P_ATM = 101325.0

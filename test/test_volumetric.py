@@ -14,8 +14,8 @@ import pytest
 from gerotor_twin.config import load_config, parse_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.model.volumetric import EdgeLosses, bypass_flow, displacement_deficit
-from gerotor_twin.offline.calibration_run import calibrate_records
-from gerotor_twin.offline.map_synth import synthetic_map
+from gerotor_twin.calibration.command import calibrate_records
+from gerotor_twin.calibration.map_synth import synthetic_map
 from gerotor_twin.twin.revolution import Revolution
 
 CLEARANCE_FACTOR, K_D = 1.2, 0.95

@@ -1,6 +1,7 @@
-"""Offline calibration: fit leakage parameters to the mean delivery flow of bench plateaus.
+"""The least-squares fit of physical parameters to the mean delivery flow of steady operating points.
 
-For every steady plateau of the recordings (:mod:`.plateaus`, the report's detector) the
+For every steady operating point (a plateau of a recording, :mod:`.plateaus`, or a row of a
+map, :mod:`.pump_map`) the
 twin is run to periodic steady state at the plateau's measured speed, suction and
 delivery pressure (:func:`.fit_model.plateau_flow`), in parallel over plateaus on all
 cores.  The weighted residuals ``r_i = (q_model,i − q_meas,i) / σ_i`` (σ_i: standard

@@ -22,7 +22,7 @@ from .. import __version__
 from ..config import load_config, parse_config
 from ..errors import InputError
 from ..units import m3s_to_lpm
-from . import calibrate as C
+from . import fit as C
 from .fit_model import apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus
 from . import selection as S
@@ -339,7 +339,7 @@ def cmd_calibrate(args) -> int:
         Path(args.json).write_text(json.dumps(res, indent=1, default=float))
         print(f"wrote {args.json}")
     if args.report:
-        from .calibration_report import write_report
+        from .report import write_report
         write_report(res, args.report)
         print(f"wrote {args.report}")
     return 0

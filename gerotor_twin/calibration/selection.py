@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.stats import t as student_t
 
-from . import calibrate as C
+from . import fit as C
 
 __all__ = ["folds", "resolve_scheme", "candidate_sets", "Candidate", "cross_validate", "baseline", "choose", "prediction_band",
            "CV_SCHEMES"]
