@@ -114,3 +114,14 @@ def test_command_says_when_the_empirical_law_wins(tmp_path, capsys):
     assert "held-out RMSE" in text and "fit RMSE" in text and "empirical 1 − η = a + b·Δp/n" in text
     assert "the empirical law predicts the held-out points better than the twin" in text
     assert load_config(out).calibration["selection"]["baseline_better"] is True
+
+
+def test_bench_map_subtracts_its_loss_closed_form():
+    """Closed form: a constructed map of `bench maps` is the twin's steady flow less the added loss; the
+    filling loss is 5 % × (n/n_max)² of the theoretical flow (at 1500 rpm of 3000: 1.25 %)."""
+    from gerotor_twin.calibration.map_bench import MAPS, _raw, build
+    case = next(c for c in MAPS if c.name == "filling")
+    got = build(case, speeds_rpm=(1500,), bars=(5,))[0]
+    plain = synthetic_map(_raw(case), [(got.omega, got.p_delivery_pa, got.oil_temperature_c)])[0]
+    qth = load_config().gears.displacement_closed_form() * 25.0
+    assert plain.flow_m3s - got.flow_m3s == pytest.approx(0.0125 * qth, rel=1e-12)

@@ -92,8 +92,10 @@ def calibrate_map(path, *, config_path=None, progress=None, params=MAP_PARAMS, c
     cfg = load_config(config_path)
     records = read_map(path, MapLimits.from_config(cfg))
     (progress or (lambda s: None))(f"{path}: {len(records)} operating points")
-    return calibrate_records(records, [str(path)], config_path=config_path, progress=progress, params=params,
-                             cv=cv, candidates=candidates, **fit_options)
+    out = calibrate_records(records, [str(path)], config_path=config_path, progress=progress, params=params,
+                            cv=cv, candidates=candidates, **fit_options)
+    out["kind"] = "map"
+    return out
 
 
 def calibrate_records(records, sources, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
@@ -250,7 +252,7 @@ def print_summary(result: dict, out=None) -> None:
         print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}"
               f"..{c['factor_ci95'][1]:.4f})", file=out)
     e, e0 = f["eta_error"], f["eta_error_prior"]
-    print(f"  all {e['n']} plateaus: |η error| max {100 * e0['max_abs']:.2f} → {100 * e['max_abs']:.2f} pt, "
+    print(f"  all {e['n']} {'map rows' if result.get('kind') == 'map' else 'plateaus'}: |η error| max {100 * e0['max_abs']:.2f} → {100 * e['max_abs']:.2f} pt, "
           f"RMSE {100 * e0['rmse']:.2f} → {100 * e['rmse']:.2f} pt; flow RMSE "
           f"{m3s_to_lpm(f['flow_error_prior_m3s']['rmse']):.3f} → {m3s_to_lpm(f['flow_error_m3s']['rmse']):.3f} L/min",
           file=out)
