@@ -108,12 +108,15 @@ def test_command_says_when_the_empirical_law_wins(tmp_path, capsys):
     p = tmp_path / "law.csv"
     p.write_text("\n".join(rows) + "\n")
     out = tmp_path / "fit.yaml"
+    page = tmp_path / "fit.html"
     assert main(["calibrate", "--map", str(p), "-o", str(out), "--candidates", "displacement", "--jobs", "1",
-                 "--quiet"]) == 0
+                 "--report", str(page), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "held-out RMSE" in text and "fit RMSE" in text and "empirical 1 − η = a + b·Δp/n" in text
     assert "the empirical law predicts the held-out points better than the twin" in text
     assert load_config(out).calibration["selection"]["baseline_better"] is True
+    html = page.read_text()
+    assert "held-out RMSE [pt]" in html and "The empirical law predicts the held-out points better" in html
 
 
 def test_bench_map_subtracts_its_loss_closed_form():

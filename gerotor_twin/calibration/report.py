@@ -50,6 +50,14 @@ def _scaled(v: float, unit: str) -> str:
     return {"m": f"{v * 1e6:.3f} µm", "m²": f"{v * 1e6:.4f} mm²"}.get(unit, f"{v:.4f}")
 
 
+def _verdict(p: dict, f: dict) -> str:
+    """Whether the data determined a parameter alone, with others as one factor, or not (kept at the prior)."""
+    if p["identifiable"]:
+        return "yes"
+    kept = set(f["insensitive"]) | set(f.get("fixed", []))
+    return "no: kept at the prior" if p["name"] in kept else "no (common factor of its group)"
+
+
 def _selection(sel: dict | None) -> str:
     """The candidate sets' fit and held-out errors, the choice and the empirical baseline ('' without selection)."""
     if not sel:
@@ -74,7 +82,7 @@ def write_report(result: dict, path) -> Path:
     params = _table(["parameter", "config field", "prior", "fitted", "95 % CI", "separately identifiable"],
                     [[p["name"], p["field"], _scaled(p["prior"], p["unit"]), _scaled(p["value"], p["unit"]),
                       f"{_scaled(p['ci95'][0], p['unit'])} … {_scaled(p['ci95'][1], p['unit'])}",
-                      "yes" if p["identifiable"] else "no (common factor of its group)"] for p in f["parameters"]])
+                      _verdict(p, f)] for p in f["parameters"]])
     combos = _table(["identifiable combination", "factor", "95 % CI"],
                     [[c["label"], f"{c['factor']:.4f}", f"{c['factor_ci95'][0]:.4f} … {c['factor_ci95'][1]:.4f}"]
                      for c in f["combinations"] if not c.get("linear")])
