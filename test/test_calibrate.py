@@ -140,6 +140,18 @@ def test_holdout_efficiency_error(fits, factor):
     assert ho["eta_error_prior"]["max_abs"] > 2 * ho["eta_error"]["max_abs"]
 
 
+def test_cross_validation_on_recordings(bags):
+    """Behaviour (known truth, factor 1.2): plateaus of a recording feed the same choice as a map's rows; leave
+    one plateau out between the prior and the gaps' common factor chooses the factor, whose held-out
+    |η error| stays within 1 pt where the prior's exceeds 2 pt; no hold-out split is made besides."""
+    res = calibrate_bags([bags[1.2][0]], cv="point", candidates=[("tip", "lateral")], jobs=2, detector=DETECTOR)
+    sel = res["selection"]
+    assert sel["cv"] == "point" and len(sel["folds"]) == 5 and sel["chosen"] == ["tip", "lateral"]
+    by = {"+".join(c["params"]): c for c in sel["candidates"]}
+    assert by["tip+lateral"]["cv_max_abs"] <= 0.01 < by[""]["cv_max_abs"] / 2
+    assert res["holdout"] is None and res["params"] == ["tip", "lateral"]
+
+
 def test_written_config_loads_and_reproduces(fits, tmp_path):
     """Behaviour: the written YAML passes the loader, keeps the provenance and holds the fitted values."""
     res = fits[FACTORS[1]]
