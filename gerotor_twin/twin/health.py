@@ -54,7 +54,35 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, OutputMessage
 
-__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse"]
+__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
+           "LEVELS", "alarm_intervals"]
+
+#: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
+LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+
+
+def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
+    """Maximal stretches of WARN or ERROR: (level name, start [s], end [s]) (end = last update at that level).
+
+    Parameters
+    ----------
+    t : sequence of float
+        Time of each health update [s].
+    rows : list of dict
+        The updates' fields (:data:`HEALTH_FIELDS`), ``level`` among them.
+    """
+    closed, prev = [], None
+    for ti, r in zip(t, rows):
+        name = LEVELS.get(int(r["level"]), "?")
+        if prev is None or name != prev[0]:
+            if prev is not None and prev[0] in ("WARN", "ERROR"):
+                closed.append(prev)
+            prev = (name, float(ti), float(ti))
+        else:
+            prev = (name, prev[1], float(ti))
+    if prev is not None and prev[0] in ("WARN", "ERROR"):
+        closed.append(prev)
+    return closed
 
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
