@@ -206,6 +206,7 @@ def provenance(result: dict) -> dict:
                            "eta_rmse_prior": f["eta_error_prior"]["rmse"]}}
     sel = result.get("selection")
     if sel:
+        block["residuals"]["eta_rmse_heldout"] = sel["cv_rmse"]
         block["selection"] = {"cv": sel["cv"], "chosen": sel["chosen"], "reason": sel["reason"],
                               "cv_rmse": sel["cv_rmse"], "prediction_band_eta": sel["prediction_band_eta"],
                               "candidates": [{"params": c["params"], "fit_rmse": c["fit_rmse"], "cv_rmse": c["cv_rmse"]}

@@ -154,12 +154,16 @@ def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> fl
 
 def calibration_eta_rmse(config) -> float:
     """Volumetric-efficiency RMSE [-] of the fit that produced ``config`` (its ``calibration`` block,
-    written by ``gerotor-twin calibrate``); 0 when the config carries none."""
-    try:
-        v = float(((getattr(config, "calibration", None) or {}).get("residuals") or {}).get("eta_rmse", 0.0))
-    except (TypeError, ValueError, AttributeError):
-        return 0.0
-    return v if math.isfinite(v) and 0.0 <= v < 1.0 else 0.0
+    written by ``gerotor-twin calibrate``): the larger of the fit's and, where the parameter set was chosen
+    by cross-validation, the held-out one (``eta_rmse_heldout``); 0 when the config carries none."""
+    out = 0.0
+    for key in ("eta_rmse", "eta_rmse_heldout"):
+        try:
+            v = float(((getattr(config, "calibration", None) or {}).get("residuals") or {}).get(key, 0.0))
+        except (TypeError, ValueError, AttributeError):
+            continue
+        out = max(out, v if math.isfinite(v) and 0.0 <= v < 1.0 else 0.0)
+    return out
 
 
 def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
