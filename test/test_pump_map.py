@@ -75,8 +75,13 @@ def test_bad_header(tmp_path, header, field):
         read_map(_write(tmp_path, header + "\n1000,5,50,0.9\n"), LIMITS)
 
 
-def test_shipped_example_parses():
-    """Behaviour: the example map shipped with the package reads with the default pump's limits."""
-    path = resource_path("config", "maps", "example_map.csv")
-    recs = read_map(path, MapLimits.from_config(load_config()))
-    assert len(recs) >= 6 and len({round(r.rpm) for r in recs}) >= 2
+@pytest.mark.parametrize("name, config, rows", [("example_map.csv", None, 9),
+                                                ("hydreco_1919.csv", "hydreco_1919_pump.yaml", 5)])
+def test_shipped_maps_parse(name, config, rows):
+    """Behaviour: the maps shipped with the package read with their pump's limits; the published one's η_v
+    (92 % at 1200 rpm) becomes 0.92 of the 74.23 cm³/rev of its twin (4.53 in³/rev) at 20 rev/s."""
+    cfg = load_config(resource_path("config", "maps", config) if config else None)
+    recs = read_map(resource_path("config", "maps", name), MapLimits.from_config(cfg))
+    assert len(recs) == rows and len({round(r.rpm) for r in recs}) >= 2
+    if config:
+        assert recs[0].flow_m3s == pytest.approx(0.92 * 4.53 * 16.387064e-6 * 20, rel=1e-4)
