@@ -12,7 +12,8 @@ from setuptools import find_packages, setup
 PACKAGE = "gerotor_twin"
 
 #: files installed under share/gerotor_twin/, at their relative paths in the source tree
-SHARE = ("package.xml", "config/*.yaml", "config/pumps/*.yaml", "config/profiles/*.yaml", "config/bench_pumps/*.yaml", "launch/*.launch.py",
+SHARE = ("package.xml", "config/*.yaml", "config/pumps/*.yaml", "config/profiles/*.yaml", "config/bench_pumps/*.yaml", "config/maps/*.csv", "config/maps/*.yaml",
+         "launch/*.launch.py",
          "layouts/*.json", "layouts/*.xml", "bags/*.mcap", "bags/*.yaml", "bags/README.md")
 
 

@@ -29,11 +29,16 @@ module                   responsibility
                          ``flows`` (right-hand side, Eq. (20)), ``contact``
                          (sec. 3.7), ``loads`` (Eqs. (24)–(27)), ``kernel``
                          (stepper), ``pump`` (``PumpModel.advance``),
-                         ``steady``, ``accuracy``, ``bench``
+                         ``steady``, ``volumetric`` (edge losses), ``accuracy``,
+                         ``bench``
 ``twin``                 ROS-free twin core: inputs, clock driver, outputs,
                          diagnostics (shared by the node and run-bag)
 ``io``                   MCAP read/write of ROS 2 messages without rclpy
-``offline``              run-bag: the twin core over a recording
+``offline``              run-bag: the twin core over a recording; sweeps,
+                         fleets of recordings (Dask)
+``calibration``          fit the twin's physical parameters to plateaus of
+                         recordings or a pump's steady map; identifiability,
+                         cross-validated choice of the parameter set
 ``report``               bench-vs-twin alignment, metrics, figures, HTML
 ``paper``                section 4 of [1]: tables 3–5, calibration, figures
 ``bench_emulator``       synth-bench: a pump that differs from the twin,

@@ -374,13 +374,14 @@ _COMMAND_MODULES = (
     "gerotor_twin.bench_emulator.cli_commands",   # synth-bench
     "gerotor_twin.report.build",                  # report
     "gerotor_twin.offline.run_bag",               # run-bag
-    "gerotor_twin.offline.calibration_run",       # calibrate
+    "gerotor_twin.calibration.command",           # calibrate
     "gerotor_twin.offline.health_log",            # health
     "gerotor_twin.ros.replay",                    # replay (imports rclpy only when run)
     "gerotor_twin.ros.cli_commands",              # node; teaches `bench` the choice `node`
     "gerotor_twin.io.cli_commands",               # log recover
     "gerotor_twin.offline.sweep",                 # sweep
     "gerotor_twin.offline.sweep_bench",           # teaches `bench` the choice `sweep`
+    "gerotor_twin.calibration.map_bench",         # teaches `bench` the choice `maps`
     "gerotor_twin.offline.batch",                 # batch
 )
 

@@ -227,6 +227,10 @@ class PumpConfig:
     fluid_model: str = "mixture"
     #: free air content and polytropic index of the mixture
     air: AirContent = AirContent()
+    #: effective displacement / that of the ideal profiles, k_D [-] (:mod:`gerotor_twin.model.volumetric`)
+    displacement_factor: float = 1.0
+    #: effective area C_d·A of a turbulent delivery → suction path [m²] (:mod:`gerotor_twin.model.volumetric`)
+    bypass_area_m2: float = 0.0
 
     def with_fluid_model(self, model: str) -> "PumpConfig":
         """The same pump with another fluid model (``"paper"`` or ``"mixture"``)."""
@@ -255,6 +259,7 @@ class PumpConfig:
             **_oil_dict(self),
             "orifice": _asdict(self.orifice),
             "leakage": {"tip_dh": self.tip_dh},
+            "volumetric": {"displacement_factor": self.displacement_factor, "bypass_area_m2": self.bypass_area_m2},
             "boundary": _asdict(self.boundary),
             "range": self.range.to_dict(),
             "numerics": _asdict(self.numerics),
@@ -293,7 +298,7 @@ def _oil_dict(cfg: PumpConfig) -> dict:
 
 
 _SECTIONS = {"gears", "clearances", "ports", "fluid", "orifice", "leakage", "boundary", "range", "numerics",
-             "micro_motion", "oil", "mixture", "fluid_model", "calibration"}
+             "micro_motion", "oil", "mixture", "fluid_model", "calibration", "volumetric"}
 
 
 def _section(raw: dict, name: str, keys: set[str], required: bool = True) -> dict:
@@ -363,6 +368,9 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     orifice = Orifice(**{k: (str(osec[k]) if k == "law" else _num(osec, "orifice", k)) for k in osec})
     ls = _section(raw, "leakage", {"tip_dh"}, False)
     tip_dh = check_range("leakage.tip_dh", _num(ls, "leakage", "tip_dh", 0.347), 0.0, 10.0, lo_open=True)
+    vs = _section(raw, "volumetric", {"displacement_factor", "bypass_area_m2"}, False)
+    k_d = check_range("volumetric.displacement_factor", _num(vs, "volumetric", "displacement_factor", 1.0), 0.5, 1.1)
+    a_b = check_range("volumetric.bypass_area_m2", _num(vs, "volumetric", "bypass_area_m2", 0.0), 0.0, 1e-4, unit="m²")
     bk = {"mode", "suction_pressure_pa", "delivery_volume_m3", "restriction_area_m2"}
     bs = _section(raw, "boundary", bk, False)
     boundary = Boundary(mode=bs.get("mode", "imposed"),
@@ -378,7 +386,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
                       boundary=boundary, range=rng, numerics=num, source=source, oil=oil,
                       reference_temperature_k=t_ref, fluid_model=parse_fluid_model(raw.get("fluid_model", "mixture")),
                       air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
-                      micro_motion=_micro_motion(raw),
+                      micro_motion=_micro_motion(raw), displacement_factor=k_d, bypass_area_m2=a_b,
                       calibration=_calibration_block(raw.get("calibration")),
                       notes=tuple(notes + far_from_default("numerics", ns, num)))
 

@@ -2,7 +2,7 @@
 
 ``setup.py`` installs them under ``share/gerotor_twin/`` of the install prefix
 (``config/pump.yaml``, ``config/twin.yaml``, ``config/pumps/``,
-``config/profiles/``, ``launch/``, ``layouts/``, ``bags/``); a source checkout
+``config/profiles/``, ``config/bench_pumps/``, ``config/maps/``, ``launch/``, ``layouts/``, ``bags/``); a source checkout
 has them at the same relative paths beside ``gerotor_twin/``.
 :func:`share_dir` finds the one directory that holds them, looking in order at
 

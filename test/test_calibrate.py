@@ -15,10 +15,10 @@ from gerotor_twin.bench_emulator.profiles import Profile, Segment
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.offline import identifiability as ident
-from gerotor_twin.offline.calibration_run import calibrate_bags, fitted_config
-from gerotor_twin.offline.fit_model import parse_params
-from gerotor_twin.offline.plateaus import DetectorSettings, bench_plateaus
+from gerotor_twin.calibration import identifiability as ident
+from gerotor_twin.calibration.command import calibrate_bags, fitted_config
+from gerotor_twin.calibration.fit_model import parse_params
+from gerotor_twin.calibration.plateaus import DetectorSettings, bench_plateaus
 
 #: five plateaus over speed and pressure, 3.6 s each, joined by 0.4 s ramps (19.6 s)
 PROFILE = Profile("calib-test", (
@@ -59,6 +59,20 @@ def test_identifiability_closed_form():
     assert b["unseparable"] == [] and b["groups"] == [["a"], ["b"]]
     c = ident.analyse(np.array([[1.0, 0.0], [2.0, 0.0]]), ("a", "b"))
     assert c["insensitive"] == ["b"] and c["groups"] == [["a"]]
+
+
+def test_identifiability_groups_only_alike_parameters_closed_form():
+    """Closed form: columns acting in opposite senses are not given a common factor (it would cancel): one is kept
+    at the prior; a column that is the sum of two orthogonal others (pairwise cos 0.71, a three-way degeneracy)
+    leaves two fitted and one at the prior; a linearly fitted parameter parallel to a log-factor is kept at the
+    prior rather than merged."""
+    a, b = np.array([1.0, 2.0, 3.0, 0.0]), np.array([0.0, 0.0, 0.0, 1.0])
+    anti = ident.analyse(np.column_stack([a, -1.0001 * a]), ("a", "b"))
+    assert len(anti["groups"]) == 1 and len(anti["groups"][0]) == 1 and len(anti["fixed"]) == 1
+    three = ident.analyse(np.column_stack([a, b, a / np.linalg.norm(a) + b]), ("a", "b", "c"))
+    assert len(three["fixed"]) == 1 and sorted(sum(three["groups"], []) + three["fixed"]) == ["a", "b", "c"]
+    lin = ident.analyse(np.column_stack([a, 2.0001 * a, b]), ("a", "x", "b"), linear=[False, True, False])
+    assert lin["fixed"] == ["x"] and lin["groups"] == [["a"], ["b"]]
 
 
 def test_covariance_closed_form():
@@ -126,6 +140,18 @@ def test_holdout_efficiency_error(fits, factor):
     assert ho["eta_error_prior"]["max_abs"] > 2 * ho["eta_error"]["max_abs"]
 
 
+def test_cross_validation_on_recordings(bags):
+    """Behaviour (known truth, factor 1.2): plateaus of a recording feed the same choice as a map's rows; leave
+    one plateau out between the prior and the gaps' common factor chooses the factor, whose held-out
+    |η error| stays within 1 pt where the prior's exceeds 2 pt; no hold-out split is made besides."""
+    res = calibrate_bags([bags[1.2][0]], cv="point", candidates=[("tip", "lateral")], jobs=2, detector=DETECTOR)
+    sel = res["selection"]
+    assert sel["cv"] == "point" and len(sel["folds"]) == 5 and sel["chosen"] == ["tip", "lateral"]
+    by = {"+".join(c["params"]): c for c in sel["candidates"]}
+    assert by["tip+lateral"]["cv_max_abs"] <= 0.01 < by[""]["cv_max_abs"] / 2
+    assert res["holdout"] is None and res["params"] == ["tip", "lateral"]
+
+
 def test_written_config_loads_and_reproduces(fits, tmp_path):
     """Behaviour: the written YAML passes the loader, keeps the provenance and holds the fitted values."""
     res = fits[FACTORS[1]]
@@ -145,7 +171,7 @@ def test_written_config_loads_and_reproduces(fits, tmp_path):
 def test_thermometer_lag_note():
     """Behaviour: a note names the fastest oil drift on the plateaus and the reading lag it makes (closed
     form τ × slope) when no lag is set; nothing when the oil is steady, the slope unknown or a lag set."""
-    from gerotor_twin.offline.plateaus import OIL_DRIFT_NOTE_K_S, thermometer_lag_note
+    from gerotor_twin.calibration.plateaus import OIL_DRIFT_NOTE_K_S, thermometer_lag_note
     recs = [{"oil_slope_k_s": 0.1}, {"oil_slope_k_s": -0.25}, {"oil_slope_k_s": float("nan")}]
     note = thermometer_lag_note(recs, 0.0)
     assert "0.25 K/s" in note and "(3 s: 0.8 K)" in note and "--oil-sensor-tau" in note

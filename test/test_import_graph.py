@@ -100,3 +100,25 @@ def test_bench_sweep_is_still_a_bench_choice():
     bench = build_parser()._subparsers._group_actions[0].choices["bench"]      # noqa: SLF001
     what = next(a for a in bench._actions if a.dest == "what")                  # noqa: SLF001
     assert {"realtime", "accuracy", "models", "node", "sweep"} <= set(what.choices)
+
+
+def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """Subpackage -> the other subpackages its modules import (top-level modules left out)."""
+    def package(name):
+        parts = name.split(".")
+        return parts[1] if len(parts) > 2 else None
+    out: dict[str, set[str]] = {}
+    for a, targets in graph.items():
+        pa = package(a)
+        if pa is None:
+            continue
+        out.setdefault(pa, set()).update(pb for pb in map(package, targets) if pb not in (None, pa))
+    return out
+
+
+def test_subpackages_import_one_way():
+    """No two subpackages of gerotor_twin import each other, directly or through others: calibration reads the
+    report's plateau detector, the report never reads calibration or offline (behaviour)."""
+    graph = package_graph(import_graph())
+    assert cycles(graph) == []
+    assert "offline" not in graph["report"] and "calibration" not in graph["report"]

@@ -146,7 +146,8 @@ def test_node_parameters_map_onto_settings():
 
 def test_model_error_floored_at_the_calibration_residual(monkeypatch):
     """Closed form: with a calibrated config (calibration.residuals.eta_rmse = e) every update's noise
-    variance is (meter_sd·q)²/n + max((model_sd·q)², (e·q_th)²), q the measured mean, n its samples."""
+    variance is (meter_sd·q)²/n + max((model_sd·q)², (e·q_th)²), q the measured mean, n its samples; a
+    cross-validated calibration's held-out RMSE floors it when larger than the fit's."""
     from pathlib import Path
 
     from gerotor_twin.config import load_config
@@ -156,6 +157,9 @@ def test_model_error_floored_at_the_calibration_residual(monkeypatch):
     e = cfg.calibration["residuals"]["eta_rmse"]
     assert calibration_eta_rmse(cfg) == e > 0
     assert calibration_eta_rmse(load_config()) == 0.0              # uncalibrated: no floor
+    from dataclasses import replace
+    held = replace(cfg, calibration={"residuals": {"eta_rmse": e, "eta_rmse_heldout": 3 * e}})
+    assert calibration_eta_rmse(held) == 3 * e                      # cross-validated: the held-out error
     seen = []
     real_update = lf.update
     monkeypatch.setattr(lf, "update", lambda est, y, h, r: seen.append(r) or real_update(est, y, h, r))

@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
+from .volumetric import EdgeLosses
 
 __all__ = ["SteadyResult", "run_steady", "reference_config", "min_open_gap", "effective_gap"]
 
@@ -168,6 +169,8 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     eta = out.volumetric_efficiency
     final_change = abs(eta - last) / max(abs(eta), 1e-12) if last is not None else float("nan")
     qth = out.theoretical_flow
+    edge = EdgeLosses.of(model.config, model.displacement)
+    q = eta * qth - edge.flow(inputs.omega, float(np.mean(out.delivery_pressure)), inputs.p_suction)
     return SteadyResult(rpm=rpm, bar=bar, model=model.bearing_name, revolutions=n, outputs=out, state=state,
-                        theoretical_flow_m3s=qth, mean_delivery_flow_m3s=eta * qth, volumetric_efficiency=eta,
+                        theoretical_flow_m3s=qth, mean_delivery_flow_m3s=q, volumetric_efficiency=q / qth,
                         periodicity_error=final_change, p_atm=p_atm)

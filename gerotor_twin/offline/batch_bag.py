@@ -78,8 +78,8 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
 
     import yaml
 
-    from .calibration_run import calibrate_bags, fitted_config
-    from .plateaus import DetectorSettings, thermometer_lag_note
+    from ..calibration.command import calibrate_bags, fitted_config
+    from ..calibration.plateaus import DetectorSettings, thermometer_lag_note
     try:
         res = calibrate_bags([bag], config_path=config, model=model, jobs=1,
                              detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s))

@@ -13,11 +13,9 @@ import numpy as np
 
 from ..io import McapReadError, open_mcap, read_topics
 from ..io.reader import multiarray_series
-from ..twin.health import HEALTH_FIELDS
+from ..twin.health import HEALTH_FIELDS, LEVELS, alarm_intervals
 
-__all__ = ["load_health", "alarm_intervals", "cmd_health", "add_parser"]
-
-LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+__all__ = ["load_health", "alarm_intervals", "LEVELS", "cmd_health", "add_parser"]
 
 
 def load_health(path) -> tuple[np.ndarray, list[dict]]:
@@ -40,22 +38,6 @@ def load_health(path) -> tuple[np.ndarray, list[dict]]:
             break
     t, v, _ = multiarray_series(s, t0_ns=t0_ns)
     return t, [dict(zip(HEALTH_FIELDS, row)) for row in v]
-
-
-def alarm_intervals(t: np.ndarray, rows: list[dict]) -> list[tuple[str, float, float]]:
-    """Maximal stretches of WARN or ERROR: (level name, start [s], end [s]) (end = last update at that level)."""
-    closed, prev = [], None
-    for ti, r in zip(t, rows):
-        name = LEVELS.get(int(r["level"]), "?")
-        if prev is None or name != prev[0]:
-            if prev is not None and prev[0] in ("WARN", "ERROR"):
-                closed.append(prev)
-            prev = (name, float(ti), float(ti))
-        else:
-            prev = (name, prev[1], float(ti))
-    if prev is not None and prev[0] in ("WARN", "ERROR"):
-        closed.append(prev)
-    return closed
 
 
 def cmd_health(args) -> int:

@@ -3,14 +3,13 @@
 Two plots, for the first twin log that carries health updates: the estimated efficiency at the
 monitor's reference point with its ±2σ band, its calibrated (healthy) value and the WARN / ERROR
 thresholds; and the estimated leakage factor with its ±2σ band. The intervals the monitor spent
-in WARN or ERROR are shaded in both (:func:`gerotor_twin.offline.health_log.alarm_intervals`).
+in WARN or ERROR are shaded in both (:func:`gerotor_twin.twin.health.alarm_intervals`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..offline.health_log import alarm_intervals
-from ..twin.health import HEALTH_FIELDS, HealthSettings
+from ..twin.health import HEALTH_FIELDS, HealthSettings, alarm_intervals
 from .context import ReportContext
 from .panels import Band, Interval, TimeSeries, Trace
 

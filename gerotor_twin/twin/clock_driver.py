@@ -19,6 +19,7 @@ import numpy as np
 
 from gerotor_twin.errors import InputError
 from gerotor_twin.model.pump import Inputs, PumpModel, PumpState
+from gerotor_twin.model.volumetric import EdgeLosses
 from gerotor_twin.twin import outputs as O
 from gerotor_twin.twin.events import EventLog
 from gerotor_twin.twin.input_book import InputBook
@@ -72,6 +73,7 @@ class ClockDriver:
         self.oil = OilTemperature(model.config.reference_temperature_k, settings.stale_timeout_s, events,
                                   settings.oil_sensor_tau_s)
         self.N = model.N
+        self._edge = EdgeLosses.of(model.config, model.displacement)   # model.volumetric
         self._S = settings.sample_ns
         self.state: PumpState | None = None
         self.epoch_ns = 0                   #: clock time of model time 0 [ns]
@@ -256,17 +258,21 @@ class ClockDriver:
                 if st.theta + w * rem >= nb - 1e-9:
                     dt, boundary = min(max((nb - st.theta) / w, 0.0), rem), nb
             st, out = self.model.advance(st, dt, inputs)
-            self._consume(out)
+            loss = self._edge.flow(w, float(np.mean(out.delivery_pressure)) if len(out) else inputs.p_delivery,
+                                   inputs.p_suction)
+            self._consume(out, loss)
+            self.recorder.add_loss(loss * dt)
             if boundary is not None:
                 st = replace(st, theta=boundary)
                 res.messages.extend(self.recorder.complete(st, self.epoch_ns + int(round(st.t * NS))))
 
-    def _consume(self, out) -> None:
+    def _consume(self, out, loss: float) -> None:
+        """Keep the last row (its delivery flow less the edge losses ``loss`` [m³/s]) and record it."""
         if len(out) == 0:
             return
         self._gap_min = np.minimum(self._gap_min, out.gaps.min(axis=0))
         self._peak_max = np.maximum(self._peak_max, out.chamber_peak_pressures.max(axis=0))
-        self._last_row = (out.chamber_pressures[-1], float(out.delivery_flow[-1]), out.eccentricity[-1])
+        self._last_row = (out.chamber_pressures[-1], float(out.delivery_flow[-1]) - loss, out.eccentricity[-1])
         self.recorder.record(out)
 
     def _publish(self, t_ns: int, res: TickResult) -> None:

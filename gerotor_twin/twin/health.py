@@ -56,7 +56,35 @@ from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
-__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse"]
+__all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
+           "LEVELS", "alarm_intervals"]
+
+#: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
+LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+
+
+def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
+    """Maximal stretches of WARN or ERROR: (level name, start [s], end [s]) (end = last update at that level).
+
+    Parameters
+    ----------
+    t : sequence of float
+        Time of each health update [s].
+    rows : list of dict
+        The updates' fields (:data:`HEALTH_FIELDS`), ``level`` among them.
+    """
+    closed, prev = [], None
+    for ti, r in zip(t, rows):
+        name = LEVELS.get(int(r["level"]), "?")
+        if prev is None or name != prev[0]:
+            if prev is not None and prev[0] in ("WARN", "ERROR"):
+                closed.append(prev)
+            prev = (name, float(ti), float(ti))
+        else:
+            prev = (name, prev[1], float(ti))
+    if prev is not None and prev[0] in ("WARN", "ERROR"):
+        closed.append(prev)
+    return closed
 
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
@@ -128,12 +156,16 @@ def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> fl
 
 def calibration_eta_rmse(config) -> float:
     """Volumetric-efficiency RMSE [-] of the fit that produced ``config`` (its ``calibration`` block,
-    written by ``gerotor-twin calibrate``); 0 when the config carries none."""
-    try:
-        v = float(((getattr(config, "calibration", None) or {}).get("residuals") or {}).get("eta_rmse", 0.0))
-    except (TypeError, ValueError, AttributeError):
-        return 0.0
-    return v if math.isfinite(v) and 0.0 <= v < 1.0 else 0.0
+    written by ``gerotor-twin calibrate``): the larger of the fit's and, where the parameter set was chosen
+    by cross-validation, the held-out one (``eta_rmse_heldout``); 0 when the config carries none."""
+    out = 0.0
+    for key in ("eta_rmse", "eta_rmse_heldout"):
+        try:
+            v = float(((getattr(config, "calibration", None) or {}).get("residuals") or {}).get(key, 0.0))
+        except (TypeError, ValueError, AttributeError):
+            continue
+        out = max(out, v if math.isfinite(v) and 0.0 <= v < 1.0 else 0.0)
+    return out
 
 
 def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:

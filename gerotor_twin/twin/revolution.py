@@ -55,6 +55,8 @@ class Revolution:
         Chamber pressures [Pa], one ``(rows, N)`` array per recorded advance.
     rows : int
         Rows recorded so far.
+    lost_m3 : float
+        Volume lost at the edge of the model since the start [m³] (:mod:`gerotor_twin.model.volumetric`).
     """
     t0: float
     vol0: float
@@ -62,6 +64,7 @@ class Revolution:
     theta: list = field(default_factory=list)
     p: list = field(default_factory=list)
     rows: int = 0
+    lost_m3: float = 0.0
 
     @classmethod
     def start(cls, st: PumpState, n: int) -> "Revolution":
@@ -82,12 +85,14 @@ class Revolution:
     def flow_summary(self, end: PumpState, displacement: float) -> tuple[float, float, float, float] | None:
         """(mean delivery [m³/s], theoretical [m³/s], leakage [m³/s], volumetric efficiency [-]) up to ``end``.
 
-        ``displacement`` is the volume per revolution [m³]; None for a revolution of zero duration.
+        ``displacement`` is the volume per revolution [m³]; the delivered volume is the model's less
+        :attr:`lost_m3` (the edge losses, :mod:`gerotor_twin.model.volumetric`); None for a revolution of
+        zero duration.
         """
         T = end.t - self.t0
         if not T > 0:
             return None
-        dv = float(end.volumes[0] - self.vol0)
+        dv = float(end.volumes[0] - self.vol0) - self.lost_m3
         q, qth = dv / T, displacement / T
         return q, qth, qth - q, dv / displacement
 
@@ -138,6 +143,11 @@ class RevolutionRecorder:
     def drop(self) -> None:
         """Forget the revolution in progress (no summary for it)."""
         self.current = None
+
+    def add_loss(self, volume_m3: float) -> None:
+        """Volume lost at the edge of the model [m³] during the last advance (none without a revolution)."""
+        if self.current is not None:
+            self.current.lost_m3 += volume_m3
 
     def record(self, out) -> None:
         """Append the rows of a solver output (``theta`` [rad], ``chamber_pressures`` [Pa])."""

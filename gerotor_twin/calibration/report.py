@@ -47,7 +47,33 @@ def _table(head: list[str], rows: list[list]) -> str:
 
 
 def _scaled(v: float, unit: str) -> str:
-    return f"{v * 1e6:.3f} µm" if unit == "m" else f"{v:.4f}"
+    return {"m": f"{v * 1e6:.3f} µm", "m²": f"{v * 1e6:.4f} mm²"}.get(unit, f"{v:.4f}")
+
+
+def _verdict(p: dict, f: dict) -> str:
+    """Whether the data determined a parameter alone, with others as one factor, or not (kept at the prior)."""
+    if p["identifiable"]:
+        return "yes"
+    kept = set(f["insensitive"]) | set(f.get("fixed", []))
+    return "no: kept at the prior" if p["name"] in kept else "no (common factor of its group)"
+
+
+def _selection(sel: dict | None) -> str:
+    """The candidate sets' fit and held-out errors, the choice and the empirical baseline ('' without selection)."""
+    if not sel:
+        return ""
+    rows = [["+".join(c["params"]) or "prior (nothing fitted)", f"{100 * c['fit_rmse']:.2f}",
+             f"{100 * c['cv_rmse']:.2f} ± {100 * c['cv_rmse_se']:.2f}", f"{100 * c['cv_max_abs']:.2f}"]
+            for c in sel["candidates"]]
+    b = sel["baseline"]
+    rows.append([f"empirical {b['law']}", f"{100 * b['fit_rmse']:.2f}", f"{100 * b['cv_rmse']:.2f}",
+                 f"{100 * b['cv_max_abs']:.2f}"])
+    verdict = ("<p><b>The empirical law predicts the held-out points better than the twin.</b></p>"
+               if sel["baseline_better"] else "")
+    return (f"<h2>Parameter set (leave one {html.escape(sel['cv'])} out, {len(sel['folds'])} folds)</h2>"
+            + _table(["set", "fit RMSE [pt]", "held-out RMSE [pt]", "held-out max [pt]"], rows)
+            + f"<p>Chosen: {html.escape(sel['reason'])}; a predicted η_v holds ± "
+              f"{100 * sel['prediction_band_eta']:.2f} pt (95 %, from the held-out errors).</p>{verdict}")
 
 
 def write_report(result: dict, path) -> Path:
@@ -56,10 +82,10 @@ def write_report(result: dict, path) -> Path:
     params = _table(["parameter", "config field", "prior", "fitted", "95 % CI", "separately identifiable"],
                     [[p["name"], p["field"], _scaled(p["prior"], p["unit"]), _scaled(p["value"], p["unit"]),
                       f"{_scaled(p['ci95'][0], p['unit'])} … {_scaled(p['ci95'][1], p['unit'])}",
-                      "yes" if p["identifiable"] else "no (common factor of its group)"] for p in f["parameters"]])
+                      _verdict(p, f)] for p in f["parameters"]])
     combos = _table(["identifiable combination", "factor", "95 % CI"],
                     [[c["label"], f"{c['factor']:.4f}", f"{c['factor_ci95'][0]:.4f} … {c['factor_ci95'][1]:.4f}"]
-                     for c in f["combinations"]])
+                     for c in f["combinations"] if not c.get("linear")])
     rows = [[r["plateau"], f"{r['rpm']:.0f}", f"{(r['p_delivery_pa'] - 101325) / 1e5:.2f}",
              f"{m3s_to_lpm(r['flow_measured_m3s']):.3f}", f"{m3s_to_lpm(r0['flow_model_m3s']):.3f}",
              f"{m3s_to_lpm(r['flow_model_m3s']):.3f}", f"{100 * r0['eta_error']:+.2f}", f"{100 * r['eta_error']:+.2f}"]
@@ -75,10 +101,10 @@ def write_report(result: dict, path) -> Path:
     page = f"""<!DOCTYPE html><html><head><meta charset="utf-8"><title>gerotor_twin calibration</title>
 <style>body{{font-family:sans-serif;font-size:14px;margin:2em}} table{{border-collapse:collapse;margin:1em 0}}
 td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}</style></head><body>
-<h1>Calibration from bench recordings</h1>
-<p>Bags: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
+<h1>Calibration from bench recordings or a steady map</h1>
+<p>Data: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
 {html.escape(result['model'])}; {len(result['plateau_records'])} plateaus; {result['date']}; {html.escape(result['software'])}.</p>
-{params}{combos}{notes}{hold}
+{params}{combos}{notes}{hold}{_selection(result.get("selection"))}
 <img alt="efficiency error per plateau" src="data:image/png;base64,{_figure(result)}">
 {plateaus}
 <p>Residual variance factor s² = {f['residual_variance_factor']:.3g} (intervals are widened by √s² when the

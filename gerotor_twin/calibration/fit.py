@@ -1,6 +1,7 @@
-"""Offline calibration: fit leakage parameters to the mean delivery flow of bench plateaus.
+"""The least-squares fit of physical parameters to the mean delivery flow of steady operating points.
 
-For every steady plateau of the recordings (:mod:`.plateaus`, the report's detector) the
+For every steady operating point (a plateau of a recording, :mod:`.plateaus`, or a row of a
+map, :mod:`.pump_map`) the
 twin is run to periodic steady state at the plateau's measured speed, suction and
 delivery pressure (:func:`.fit_model.plateau_flow`), in parallel over plateaus on all
 cores.  The weighted residuals ``r_i = (q_model,i − q_meas,i) / σ_i`` (σ_i: standard
@@ -121,7 +122,11 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     sig = sigmas(records, flow_floor)
     p = len(names)
     f_prior = ev.flows(names, [np.zeros(p)], records)[0]
-    analysis = ident.analyse(_jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond)
+    if p == 0:          # the prior itself: nothing to fit
+        return FitResult((), np.zeros(0), np.zeros((0, 0)), ident.analyse(np.zeros((len(records), 0)), (), rcond),
+                         (f_prior - q) / sig, f_prior, f_prior, math.nan, len(records), 0)
+    analysis = ident.analyse(_jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond,
+                             linear=[PARAMETERS[n].step > 0 for n in names])
     basis = analysis["basis"]
     say(f"  identifiable directions: {len(analysis['kept'])} of {p}")
     cache = {}
@@ -145,14 +150,24 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     if r == 0:
         b, nfev = np.zeros(0), 0
     else:
-        sol = least_squares(fun, np.zeros(r), jac=jac, bounds=(-1.5, 1.5), x_scale=0.05, xtol=1e-4, ftol=1e-6,
-                            max_nfev=30)
+        lo, hi = _bounds(names, ev.raw_prior, basis)
+        # a start on a bound (a bypass area of 0) would get steps scaled by its distance to it: start inside
+        b0 = np.where(lo >= 0, lo + np.minimum(0.1, (hi - lo) / 2), 0.0)
+        sol = least_squares(fun, b0, jac=jac, bounds=(lo, hi), x_scale=0.05, xtol=1e-4, ftol=1e-6, max_nfev=30)
         b, nfev = sol.x, sol.nfev
     x = basis @ b
     res = (model(b) - q) / sig
     jb = jac(b) if r else np.zeros((len(records), 0))
     cov_b, s2, dof = ident.covariance(jb, res) if r else (np.zeros((0, 0)), math.nan, len(records))
     return FitResult(tuple(names), x, basis @ cov_b @ basis.T, analysis, res, model(b), f_prior, s2, dof, nfev)
+
+
+def _bounds(names, raw_prior: dict, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the fitted coordinates b (x = basis @ b): each group within every member's physical bounds."""
+    xb = np.array([PARAMETERS[n].x_bounds(v) for n, v in zip(names, prior_values(raw_prior, names))])
+    lo = np.array([xb[basis[:, k] > 0, 0].max() for k in range(basis.shape[1])])
+    hi = np.array([xb[basis[:, k] > 0, 1].min() for k in range(basis.shape[1])])
+    return lo, hi
 
 
 def split_holdout(records: list[PlateauRecord], every: int) -> tuple[list, list]:
@@ -193,17 +208,19 @@ def summary_stats(rows: list[dict], key: str = "eta_error") -> dict:
 
 
 def parameter_table(fr: FitResult, raw_prior: dict, z: float = 1.96) -> list[dict]:
-    """Fitted value, 95 % interval (log-normal, ``z`` σ) and whether the data determine it alone."""
+    """Fitted value, 95 % interval (``z`` σ of the fitted coordinate: log-normal for a log-factor) and whether
+    the data determine it alone; ``log_factor``: the fitted coordinate x (:mod:`.fit_model`)."""
     prior = prior_values(raw_prior, fr.names)
     sd = np.sqrt(np.clip(np.diag(fr.cov_x), 0, None))
     alone = _separately_determined(fr)
     rows = []
     for i, n in enumerate(fr.names):
-        rows.append({"name": n, "field": f"{PARAMETERS[n].section}.{PARAMETERS[n].key}", "unit": PARAMETERS[n].unit,
-                     "prior": float(prior[i]), "value": float(prior[i] * math.exp(fr.x[i])),
-                     "log_factor": float(fr.x[i]), "log_factor_sd": float(sd[i]),
-                     "ci95": [float(prior[i] * math.exp(fr.x[i] - z * sd[i])),
-                              float(prior[i] * math.exp(fr.x[i] + z * sd[i]))],
+        p = PARAMETERS[n]
+        rows.append({"name": n, "field": f"{p.section}.{p.key}", "unit": p.unit,
+                     "prior": float(prior[i]), "value": float(p.value(prior[i], fr.x[i])),
+                     "log_factor": float(fr.x[i]), "log_factor_sd": float(sd[i]), "linear": p.step > 0,
+                     "ci95": [float(p.value(prior[i], fr.x[i] - z * sd[i])),
+                              float(p.value(prior[i], fr.x[i] + z * sd[i]))],
                      "identifiable": bool(alone[i])})
     return rows
 
@@ -220,13 +237,16 @@ def _separately_determined(fr: FitResult) -> np.ndarray:
 
 
 def combinations(fr: FitResult, z: float = 1.96) -> list[dict]:
-    """Each identifiable combination c·x with its standard deviation and 95 % interval."""
+    """Each identifiable combination c·x with its standard deviation and 95 % interval; ``factor``: exp(c·x),
+    the common factor of a group of log-factors (``linear``: the group holds a linearly fitted parameter, whose
+    value is in :func:`parameter_table`)."""
     out = []
     combos = fr.analysis["combinations"]
     for k in range(combos.shape[1]):
         c = combos[:, k]
         v, sd = float(c @ fr.x), float(math.sqrt(max(c @ fr.cov_x @ c, 0.0)))
-        out.append({"coefficients": dict(zip(fr.names, c.tolist())),
+        linear = any(PARAMETERS[n].step > 0 for n, ci in zip(fr.names, c) if abs(ci) > 0)
+        out.append({"coefficients": dict(zip(fr.names, c.tolist())), "linear": linear,
                     "label": ident.combination_label(c, fr.names), "value": v, "sd": sd,
                     "ci95": [v - z * sd, v + z * sd], "factor": math.exp(v),
                     "factor_ci95": [math.exp(v - z * sd), math.exp(v + z * sd)]})

@@ -2,7 +2,8 @@
 
 Parameters are fitted as log-factors ``x = ln(value / prior)`` so that clearances of
 tens of µm and a discharge coefficient near 0.7 share one scale; ``x = 0`` is the prior
-(the pump config given).
+(the pump config given).  A parameter whose prior may be 0 (the bypass area) is fitted as
+``x = (value − prior) / step`` instead, ``step`` its typical size (:attr:`FitParameter.step`).
 
 Fittable parameters (``--params``):
 
@@ -13,7 +14,15 @@ tip        clearances.tooth_tip_m        tooth-tip leakage (≈ δ³ Poiseuille 
 lateral    clearances.lateral_m          lateral, suction–delivery and drain leakage (≈ s³)
 cd         orifice.cd_max                port orifices (filling at high speed)
 tip_dh     leakage.tip_dh                equivalent length of the tooth-tip gap
+displace-  volumetric.displacement_      effective displacement k_D: a flow deficit
+ment       factor                        (1 − k_D)·D·n at every pressure and speed
+bypass     volumetric.bypass_area_m2     a turbulent delivery → suction path, ∝ √Δp
+                                         (fitted linearly, step 1 mm²)
 =========  ============================  ===========================================
+
+Each starts at its prior, the value of the pump config given (``displacement``: 1, the ideal
+profiles, unless the config says otherwise), and is fitted only when the identifiability
+analysis finds the data determine it (:mod:`.identifiability`); otherwise it stays there.
 """
 from __future__ import annotations
 
@@ -41,6 +50,17 @@ class FitParameter:
     upper: float                 #: highest value allowed
     unit: str
     description: str
+    step: float = 0.0            #: 0: fitted as ln(value / prior); > 0: as (value − prior) / step [unit]
+
+    def value(self, prior: float, x: float) -> float:
+        """The value at fitted coordinate ``x`` (unclipped) [unit]."""
+        return prior + self.step * x if self.step > 0 else prior * math.exp(x)
+
+    def x_bounds(self, prior: float, limit: float = 1.5) -> tuple[float, float]:
+        """The coordinates of the physical bounds, within ±``limit`` for a log-factor [-]."""
+        if self.step > 0:
+            return (self.lower - prior) / self.step, (self.upper - prior) / self.step
+        return max(-limit, math.log(self.lower / prior)), min(limit, math.log(self.upper / prior))
 
 
 PARAMETERS = {p.name: p for p in (
@@ -48,6 +68,10 @@ PARAMETERS = {p.name: p for p in (
     FitParameter("lateral", "clearances", "lateral_m", 1e-6, 4.9e-4, "m", "lateral clearance per face"),
     FitParameter("cd", "orifice", "cd_max", 0.1, 1.0, "-", "turbulent discharge coefficient of the ports"),
     FitParameter("tip_dh", "leakage", "tip_dh", 0.01, 10.0, "-", "dh of the tooth-tip gap's equivalent length"),
+    FitParameter("displacement", "volumetric", "displacement_factor", 0.5, 1.1, "-",
+                 "effective displacement / ideal profiles' (filling, tolerances)"),
+    FitParameter("bypass", "volumetric", "bypass_area_m2", 0.0, 1e-4, "m²",
+                 "effective area of a turbulent delivery → suction path", step=1e-6),
 )}
 
 
@@ -66,15 +90,16 @@ def parse_params(text: str) -> tuple[str, ...]:
 
 def prior_values(raw: dict, names) -> np.ndarray:
     """The prior value of each named parameter in a raw config mapping."""
-    return np.array([float(raw[PARAMETERS[n].section][PARAMETERS[n].key]) for n in names])
+    return np.array([float(raw.get(PARAMETERS[n].section, {}).get(PARAMETERS[n].key, 0.0)) for n in names])
 
 
 def apply(raw: dict, names, x) -> dict:
-    """A copy of the raw config mapping with each parameter = prior · exp(x), clipped to its bounds."""
+    """A copy of the raw config mapping with each parameter at coordinate x (:meth:`FitParameter.value`),
+    clipped to its bounds."""
     out = json.loads(json.dumps(raw))
     for n, xi in zip(names, x):
         p = PARAMETERS[n]
-        v = float(raw[p.section][p.key]) * math.exp(float(xi))
+        v = p.value(float(raw.get(p.section, {}).get(p.key, 0.0)), float(xi))
         out.setdefault(p.section, {})[p.key] = min(max(v, p.lower), p.upper)
     return out
 

@@ -1,0 +1,148 @@
+r"""``gerotor-twin bench maps``: calibration from steady maps built with physics the twin does not contain.
+
+Each map is the twin's steady state at chosen parameters (:mod:`.map_synth`) with a loss added
+that the twin's chamber model has no term for, or has only at its edge
+(:mod:`gerotor_twin.model.volumetric`); the calibration (:func:`.calibration_run.calibrate_records`,
+candidate sets :data:`.calibration_run.MAP_CANDIDATES`, leave one speed out) then reports its held-out
+error beside the nominal twin's and the empirical law's.  Added losses (Δp = p_d − p_s [Pa],
+n [rev/s], ``Q_th = D n``):
+
+* ``filling``: incomplete filling growing with speed, :math:`ΔQ = 0.05\,(n/n_\max)^2\,Q_{th}`
+  (the suction's pressure drop rising as n²);
+* ``deforming_gap``: a laminar path whose gap opens with pressure (plates and housing deflect),
+  :math:`ΔQ = G\,Δp\,(1 + Δp/p^*)^3 μ_{40}/μ(T)`, G giving 1 % of Q_th at 1000 rpm and 5 bar at 40 °C,
+  p* = 40 bar;
+* the twin's own edge terms at known values (``deficit``: k_D = 0.96 and gaps × 1.1; ``bypass``: 0.5 mm²
+  at two oil temperatures), as the recoverable reference.
+
+Printed, never asserted (a benchmark: the figures are in docs/calibration_health.md).
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..config import load_config
+from .command import MAP_CANDIDATES, calibrate_records
+from .map_synth import synthetic_map
+
+__all__ = ["MAPS", "MapCase", "run", "add_parser"]
+
+
+@dataclass(frozen=True)
+class MapCase:
+    """One constructed map: the twin's parameters, the loss added and the operating points."""
+    name: str
+    description: str
+    volumetric: dict             #: ``volumetric`` values of the twin's truth (k_D, bypass area)
+    loss: Callable | None        #: (cfg, omega [rad/s], dp [Pa], T [°C]) -> flow lost [m³/s], or None
+    gap_factor: float = 1.0      #: tip and lateral clearances × this [-]
+    temperatures: tuple = (50.0,)  #: oil temperatures of the map [°C]
+
+
+def _filling(cfg, omega, dp, t_c):
+    n, n_max = omega / (2 * math.pi), cfg.range.max_speed_rpm / 60
+    return 0.05 * (n / n_max) ** 2 * cfg.gears.displacement_closed_form() * n
+
+
+def _deforming_gap(cfg, omega, dp, t_c):
+    mu = cfg.fluid_at(t_c + 273.15).viscosity_pa_s / cfg.fluid_at(313.15).viscosity_pa_s
+    g = 0.01 * cfg.gears.displacement_closed_form() * (1000 / 60) / (5e5 * (1 + 5 / 40) ** 3)
+    return g * dp * (1 + dp / 40e5) ** 3 / mu
+
+
+MAPS = (
+    MapCase("deficit", "k_D 0.96, gaps × 1.1 (in the twin)", {"displacement_factor": 0.96}, None, 1.1),
+    MapCase("bypass", "bypass 0.5 mm², k_D 0.97, 30 and 60 °C (in the twin)",
+            {"displacement_factor": 0.97, "bypass_area_m2": 0.5e-6}, None, 1.0, (30.0, 60.0)),
+    MapCase("filling", "filling loss 5 % × (n/n_max)², gaps × 1.1 (not in the twin)", {}, _filling, 1.1),
+    MapCase("deforming_gap", "gap opening with pressure, (1 + Δp/40 bar)³ (not in the twin)", {}, _deforming_gap),
+)
+
+
+def _raw(case: MapCase) -> dict:
+    raw = load_config().to_dict()
+    raw["clearances"]["tooth_tip_m"] *= case.gap_factor
+    raw["clearances"]["lateral_m"] *= case.gap_factor
+    raw["volumetric"].update(case.volumetric)
+    return raw
+
+
+def build(case: MapCase, speeds_rpm=(1000, 2000, 3000), bars=(5, 12.5, 20)) -> list:
+    """The map of ``case``: the twin's steady state at its truth, less its added loss."""
+    from dataclasses import replace
+    cfg = load_config()
+    pts = [(rpm * math.pi / 30, cfg.fluid.atmospheric_pa + bar * 1e5, t)
+           for rpm in speeds_rpm for bar in bars for t in case.temperatures]
+    recs = synthetic_map(_raw(case), pts, source=f"{case.name}.csv")
+    if case.loss is None:
+        return recs
+    p_s = cfg.boundary.suction_pressure_pa
+    return [replace(r, flow_m3s=r.flow_m3s - case.loss(cfg, r.omega, r.p_delivery_pa - p_s, r.oil_temperature_c))
+            for r in recs]
+
+
+def _row(case: MapCase, res: dict) -> dict:
+    sel = res["selection"]
+    cands = {"+".join(c["params"]): c for c in sel["candidates"]}
+    chosen = cands["+".join(sel["chosen"])]
+    mean_abs = lambda e: float(np.mean(np.abs(e)))            # noqa: E731
+    return {"map": case.name, "what": case.description,
+            "nominal_mean_abs": mean_abs(cands[""]["cv_errors"]), "chosen": "+".join(sel["chosen"]) or "prior",
+            "fit_rmse": chosen["fit_rmse"], "cv_mean_abs": mean_abs(chosen["cv_errors"]),
+            "cv_max_abs": chosen["cv_max_abs"], "band": sel["prediction_band_eta"],
+            "covered": int(np.sum(np.abs(chosen["cv_errors"]) <= sel["prediction_band_eta"])),
+            "points": len(chosen["cv_errors"]),
+            "law_cv_mean_abs": mean_abs(sel["baseline"]["cv_errors"]),
+            "law_cv_max_abs": sel["baseline"]["cv_max_abs"], "law_better": sel["baseline_better"]}
+
+
+def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
+    """Build, calibrate and print each map (all of :data:`MAPS`, or those named)."""
+    out = out or sys.stdout
+    rows = []
+    print("| map | nominal twin: held-out mean \\|η err\\| | chosen set | fit RMSE | held-out mean \\|η err\\| (max) "
+          "| 95 % band (held-out points inside) | empirical law: held-out mean (max) |", file=out)
+    print("|---|---|---|---|---|---|---|", file=out)
+    for case in MAPS:
+        if names and case.name not in names:
+            continue
+        res = calibrate_records(build(case), [f"{case.name}.csv"], params=("tip", "lateral", "displacement", "bypass"),
+                                cv="speed", candidates=MAP_CANDIDATES, jobs=jobs)
+        r = _row(case, res)
+        rows.append(r)
+        pt = lambda v: f"{100 * v:.2f}"                        # noqa: E731
+        print(f"| `{r['map']}`: {r['what']} | {pt(r['nominal_mean_abs'])} | {r['chosen']} | {pt(r['fit_rmse'])} | "
+              f"{pt(r['cv_mean_abs'])} ({pt(r['cv_max_abs'])}) | ± {pt(r['band'])} ({r['covered']}/{r['points']}) | "
+              f"{pt(r['law_cv_mean_abs'])} "
+              f"({pt(r['law_cv_max_abs'])}){' **better**' if r['law_better'] else ''} |", file=out, flush=True)
+    return rows
+
+
+def add_parser(subparsers) -> None:
+    """Teach the ``bench`` sub-command the choice ``maps`` (registered in ``cli._COMMAND_MODULES``)."""
+    bench = subparsers.choices.get("bench")
+    if bench is None:
+        return
+    for action in bench._actions:                                    # noqa: SLF001 - extend choices
+        if action.dest == "what" and action.choices is not None:
+            action.choices = tuple(action.choices) + ("maps",)
+    bench.add_argument("--maps", help="bench maps: comma-separated map names (default all: "
+                                      + ", ".join(c.name for c in MAPS) + ")")
+    bench.add_argument("--jobs", type=int, default=None, help="bench maps: worker processes (default: all cores)")
+    previous = bench.get_default("func")
+
+    def dispatch(args):
+        if args.what != "maps":
+            return previous(args)
+        rows = run(args.maps.split(",") if args.maps else None, args.jobs)
+        if args.json:
+            with open(args.json, "w", encoding="utf-8") as f:
+                json.dump(rows, f, indent=1)
+        return 0
+    bench.set_defaults(func=dispatch)

@@ -1,0 +1,181 @@
+r"""Which parameter set to fit: cross-validation among candidates, and a two-term empirical law as the baseline.
+
+Each candidate set of parameters (the prior itself, fitting nothing, among them) is fitted on
+all folds but one and predicts the points of the one left out (:func:`folds`: leave one speed
+out, or leave one point out).  Its held-out error is the root mean square of the volumetric-
+efficiency errors of every point when held out, ``e_i = η_model,i − η_meas,i`` [-].  The set
+chosen is the one with the fewest fitted directions whose held-out RMSE is within the noise of
+the best: one standard error, or the RMS standard deviation of a point's η_v the fit assumes
+where that is larger (the one-standard-error rule; Hastie, Tibshirani & Friedman, *The Elements of
+Statistical Learning*, 2nd ed., sec. 7.10), the standard error of an RMSE from that of the
+mean squared error:
+
+.. math::
+    \mathrm{SE}(\mathrm{RMSE}) = \frac{\mathrm{sd}(e_i^2)}{2\,\mathrm{RMSE}\,\sqrt{m}}
+
+The chosen set's held-out errors give the 95 % prediction band of a predicted efficiency,
+``± t₀.₉₇₅,m−1 · RMSE_cv``: it holds the model-form error the folds showed, not only the
+parameters' covariance.
+
+The baseline is the law a spreadsheet fits to a map,
+
+.. math::
+    1 - \eta_v = a + b \, \frac{\Delta p}{n}
+
+(Δp = p_delivery − p_suction [Pa], n [rev/s]; ``a``: losses proportional to the flow,
+``b``: laminar leakage), fitted by linear least squares on the same folds.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.stats import t as student_t
+
+from . import fit as C
+
+__all__ = ["folds", "resolve_scheme", "candidate_sets", "Candidate", "cross_validate", "baseline", "choose", "prediction_band",
+           "CV_SCHEMES"]
+
+CV_SCHEMES = ("speed", "point")
+#: speeds within this relative difference are one speed of a map or a recording [-]
+SPEED_TOLERANCE = 0.02
+
+
+def folds(records: list[PlateauRecord], scheme: str) -> list[np.ndarray]:
+    """Index arrays of the points each fold holds out: ``"speed"`` (one fold per speed, speeds within
+    :data:`SPEED_TOLERANCE` together) or ``"point"`` (one fold per point)."""
+    if scheme == "point":
+        return [np.array([i]) for i in range(len(records))]
+    speeds: list[float] = []
+    label = []
+    for r in records:
+        k = next((j for j, s in enumerate(speeds) if abs(r.omega - s) <= SPEED_TOLERANCE * s), None)
+        if k is None:
+            speeds.append(r.omega)
+            k = len(speeds) - 1
+        label.append(k)
+    label = np.array(label)
+    return [np.flatnonzero(label == k) for k in range(len(speeds))]
+
+
+def resolve_scheme(scheme: str, records: list) -> str:
+    """``"auto"`` → ``"speed"`` when the points have two speeds or more, else ``"point"``; others as given."""
+    from ..errors import InputError
+    if scheme not in CV_SCHEMES + ("none", "auto"):
+        raise InputError("--cv", scheme, "auto | speed | point | none")
+    if scheme == "auto":
+        return "speed" if len(folds(records, "speed")) >= 2 else "point"
+    if scheme == "speed" and len(folds(records, "speed")) < 2:
+        raise InputError("--cv", scheme, "point or none for points at one speed", "leave-one-speed-out needs two speeds")
+    return scheme
+
+
+def candidate_sets(params: tuple[str, ...], max_subsets: int = 3) -> list[tuple[str, ...]]:
+    """The prior (empty set), then every subset of ``params`` when they are at most ``max_subsets``, else
+    the prefixes of ``params`` (its order: the user's), smallest first."""
+    if len(params) <= max_subsets:
+        return [s for k in range(len(params) + 1) for s in itertools.combinations(params, k)]
+    return [params[:k] for k in range(len(params) + 1)]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate set: its held-out and fit errors (η_v, [-])."""
+    names: tuple[str, ...]
+    cv_errors: np.ndarray        #: each point's η error when its fold was held out [-]
+    fit_errors: np.ndarray       #: each point's η error of the fit on all points [-]
+    directions: int              #: identifiable directions of the fit on all points [-]
+
+    @property
+    def cv_rmse(self) -> float:
+        return _rmse(self.cv_errors)
+
+    @property
+    def cv_rmse_se(self) -> float:
+        """Standard error of :attr:`cv_rmse` (module doc) [-]."""
+        e2 = self.cv_errors ** 2
+        r = self.cv_rmse
+        return float(np.std(e2, ddof=1) / (2 * r * math.sqrt(e2.size))) if e2.size > 1 and r > 0 else 0.0
+
+    def summary(self) -> dict:
+        return {"params": list(self.names), "directions": self.directions,
+                "fit_rmse": _rmse(self.fit_errors), "fit_max_abs": float(np.abs(self.fit_errors).max()),
+                "cv_rmse": self.cv_rmse, "cv_rmse_se": self.cv_rmse_se,
+                "cv_max_abs": float(np.abs(self.cv_errors).max()), "cv_errors": self.cv_errors.tolist()}
+
+
+def _rmse(e: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(e)))) if len(e) else math.nan
+
+
+def _eta_errors(records, flow_model, displacement_m3: float) -> np.ndarray:
+    return np.array([r["eta_error"] for r in C.plateau_errors(records, flow_model, displacement_m3)])
+
+
+def cross_validate(ev: C.Evaluator, names, records, fold_index, displacement_m3: float, opts: dict,
+                   say=lambda s: None) -> tuple[Candidate, C.FitResult]:
+    """Held-out η errors of fitting ``names`` (each fold fitted on the others), and the fit on all points."""
+    names = tuple(names)
+    cv = np.full(len(records), np.nan)
+    for held in fold_index:
+        out = set(held.tolist())
+        train = [r for i, r in enumerate(records) if i not in out]
+        test = [records[i] for i in held]
+        x = C.fit(ev, names, train, **opts).x
+        cv[held] = _eta_errors(test, ev.flows(names, [x], test)[0], displacement_m3)
+    fr = C.fit(ev, names, records, **opts)
+    cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(fr.analysis["groups"]))
+    say(f"  {'+'.join(names) or 'prior'}: fit RMSE {100 * _rmse(cand.fit_errors):.2f} pt, held-out RMSE {100 * cand.cv_rmse:.2f} pt")
+    return cand, fr
+
+
+def choose(cands: list[Candidate], noise: float = 0.0) -> tuple[Candidate, str]:
+    """The simplest candidate within the noise of the best held-out RMSE, and why (one line).
+
+    Within the noise: held-out RMSE ≤ best + max(its standard error, ``noise``), ``noise`` [-] being the
+    RMS standard deviation of a point's η_v the fit assumes (measurement ⊕ model-error floor): a smaller
+    difference is not evidence.  Simplest: the fewest identifiable directions (tip and lateral fitted as one
+    common factor count once), then the lower held-out RMSE.
+    """
+    best = min(cands, key=lambda c: c.cv_rmse)
+    margin = max(best.cv_rmse_se, noise)
+    ok = [c for c in cands if c.cv_rmse <= best.cv_rmse + margin]
+    pick = min(ok, key=lambda c: (c.directions, c.cv_rmse))
+    name = "+".join(pick.names) or "the prior (nothing fitted)"
+    if pick is best:
+        why = f"{name}: lowest held-out RMSE ({100 * best.cv_rmse:.2f} pt)"
+    else:
+        why = (f"{name}: the fewest fitted directions ({pick.directions}) within the noise of the best held-out "
+               f"RMSE ({100 * pick.cv_rmse:.2f} ≤ {100 * best.cv_rmse:.2f} + {100 * margin:.2f} pt, "
+               f"{'+'.join(best.names)})")
+    return pick, why
+
+
+def prediction_band(cand: Candidate, level: float = 0.95) -> float:
+    """Half-width of the ``level`` prediction band of η_v from the held-out errors (module doc) [-]."""
+    m = cand.cv_errors.size
+    return float(student_t.ppf(0.5 + level / 2, max(m - 1, 1)) * cand.cv_rmse)
+
+
+def baseline(records, fold_index, displacement_m3: float, p_suction_default_pa: float) -> dict:
+    """The empirical law of the module doc: fit on all points, and held out on the same folds as the twin."""
+    recs = [r if math.isfinite(r.p_suction_pa) else replace(r, p_suction_pa=p_suction_default_pa) for r in records]
+    x = np.array([(r.p_delivery_pa - r.p_suction_pa) / (r.omega / (2 * math.pi)) for r in recs])
+    y = np.array([1 - r.flow_m3s / (displacement_m3 * r.omega / (2 * math.pi)) for r in recs])
+    design = np.column_stack([np.ones_like(x), x])
+
+    def fit(idx):
+        return np.linalg.lstsq(design[idx], y[idx], rcond=None)[0]
+    coef = fit(np.arange(len(recs)))
+    cv = np.full(len(recs), np.nan)
+    for held in fold_index:
+        train = np.setdiff1d(np.arange(len(recs)), held)
+        cv[held] = -(design[held] @ fit(train) - y[held])      # η error = −(error of 1 − η)
+    fit_e = -(design @ coef - y)
+    return {"law": "1 − η = a + b·Δp/n", "a": float(coef[0]), "b_per_pa_s": float(coef[1]),
+            "fit_rmse": _rmse(fit_e), "fit_max_abs": float(np.abs(fit_e).max()),
+            "cv_rmse": _rmse(cv), "cv_max_abs": float(np.abs(cv).max()), "cv_errors": cv.tolist()}
+
