@@ -55,6 +55,7 @@ demo-sweep: $(STAMP)
 BENCH_ARGS ?= --seconds 3 --repeats 3 --compile
 bench: $(STAMP)
 	$(VENV)/bin/gerotor-twin bench all $(BENCH_ARGS) --json out/bench/all.json --write-doc docs/performance.md
+	$(VENV)/bin/gerotor-twin bench parts --family --json out/bench/parts.json --write-doc docs/performance.md
 
 # the accuracy table of docs/numerics.md, measured again and written in place (seconds with the reference
 # cache filled; each reference computed afresh costs minutes)

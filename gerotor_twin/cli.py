@@ -279,18 +279,22 @@ def _bench_parts(args) -> int:
     from .config import load_config
     from .compile_events import announce_compilation
     from .model.bench_parts import print_parts
-    if args.family is not None:
+    from .model.bench_all import provenance
+    from .model.bench_parts import parts_markdown
+    cfg = _with_numerics(load_config(args.config), args.numerics)
+    points = [(args.config or "default", cfg, rpm, bar) for rpm in _floats(args.rpm or "3000", "--rpm")
+              for bar in _floats(args.bar or "27.5", "--bar")]
+    if args.family is not None:                     # and each family pump at its top speed, lowest pressure
         from .model.family import family_pumps, pressure_extremes, speed_extremes
-        points = [(p.name, _with_numerics(p.config, args.numerics), speed_extremes(p.config)[1],
-                   pressure_extremes(p.config)[0]) for p in family_pumps(args.family or None, args.pumps)]
-    else:
-        cfg = _with_numerics(load_config(args.config), args.numerics)
-        points = [(args.config or "default pump", cfg, rpm, bar) for rpm in _floats(args.rpm or "3000", "--rpm")
-                  for bar in _floats(args.bar or "27.5", "--bar")]
+        points += [(p.name, _with_numerics(p.config, args.numerics), speed_extremes(p.config)[1],
+                    pressure_extremes(p.config)[0]) for p in family_pumps(args.family or None, args.pumps)]
+    prov = provenance(_bench_command(args))
     with announce_compilation("compiling the part benchmarks (about a minute)"):
         rows = print_parts(points)
     if args.json:
         _write_json(args.json, {"parts": rows})
+    if args.markdown or args.write_doc:
+        _write_block(args, parts_markdown(rows, prov.finish().sentence()), "bench parts")
     return 0
 
 
@@ -321,12 +325,15 @@ def _bench_family(args) -> int:
 
 
 def _bench_command(args) -> str:
-    """The ``bench all|accuracy`` command line that reproduces ``args`` (written into its markdown block)."""
+    """The ``bench all|accuracy|parts`` command line that reproduces ``args`` (written into its markdown block)."""
     import shlex
     words = ["gerotor-twin", "bench", args.what]
     if args.what == "all":
         words += ["--seconds", f"{args.seconds:g}", "--repeats", str(args.repeats)] + (["--compile"] * args.compile)
         options = ("--config", args.config), ("--family", args.family or None), ("--pumps", args.pumps)
+    elif args.what == "parts":
+        words += ["--family"] * (args.family is not None) + ([shlex.quote(args.family)] if args.family else [])
+        options = ("--rpm", args.rpm), ("--bar", args.bar), ("--config", args.config), ("--pumps", args.pumps)
     else:
         options = (("--rpm", args.rpm or "3000"), ("--bar", args.bar or "27.5"), ("--models", args.models or "mobility"),
                    ("--config", args.config))
@@ -449,8 +456,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "or ~/.cache/gerotor_twin/references; keyed by the pump, the point, the model and the code)")
     b.add_argument("--no-reference-cache", action="store_true", help="accuracy: compute every reference afresh")
     b.add_argument("--json", help="write the figures to this JSON file")
-    b.add_argument("--markdown", metavar="F", help="all / accuracy: write the figures as a markdown block to F")
-    b.add_argument("--write-doc", metavar="F", help="all / accuracy: replace the block between '<!-- bench WHAT: begin "
+    b.add_argument("--markdown", metavar="F", help="all / accuracy / parts: write the figures as a markdown block to F")
+    b.add_argument("--write-doc", metavar="F", help="all / accuracy / parts: replace the block between '<!-- bench WHAT: begin "
                                                     "-->' and '<!-- bench WHAT: end -->' of the markdown file F")
     b.add_argument("--compile", action="store_true",
                    help="all: also time the first compile on an empty numba cache (minutes)")

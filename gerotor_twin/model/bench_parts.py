@@ -36,7 +36,7 @@ from .gear_coupling import linearise
 from .params import CT_PENDING, operating
 from .pump import Inputs, PumpModel
 
-__all__ = ["PARTS", "time_parts", "print_parts"]
+__all__ = ["PARTS", "time_parts", "print_parts", "parts_markdown"]
 
 #: The loops compile on each run, not cached: numba checks a cached function against its own file only, and a
 #: cached loop would keep timing an old kernel; importing ``_jit`` instead would put this module into the kernel's
@@ -165,3 +165,27 @@ def print_parts(points, out=print) -> list[dict]:
             + " ".join(f"{u[p]:12.2f}" for p in PARTS)
             + f" {r['accounted_us']:9.2f} {r['us_per_output_step'] - r['accounted_us']:6.2f}")
     return rows
+
+
+#: Column heads of :func:`parts_markdown`, per part.
+_HEADS = {"rhs_jacobian": "RHS + Jacobian", "rhs": "RHS", "first_stage": "first stage", "ros2_step": "ROS2 step",
+          "lu": "W, LU, 2 solves", "contact": "tip gaps", "linearise": "gear linearisation"}
+
+
+def parts_markdown(rows, sentence: str) -> str:
+    """The block ``bench parts`` writes into docs/performance.md: ``sentence`` (the run's provenance) and one table
+    row per :func:`time_parts` result in ``rows`` (each with its ``pump`` label), between the markers of
+    ``"bench parts"`` (:func:`.bench_all.markers`)."""
+    from .bench_all import markers
+    begin, end = markers("bench parts")
+    lines = [begin, sentence, "",
+             "| pump | N | rpm | bar | µs / output step | acc | rej | " + " | ".join(_HEADS[p] for p in PARTS)
+             + " | accounted | other |", "|" + "---|" * (9 + len(PARTS))]
+    for r in rows:
+        u = r["us_per_call"]
+        lines.append(f"| {r['pump']} | {r['chambers']} | {r['rpm']:g} | {r['bar']:g} | {r['us_per_output_step']:.2f} | "
+                     f"{r['accepted_per_step']:.2f} | {r['rejected_per_step']:.2f} | "
+                     + " | ".join(f"{u[p]:.2f}" for p in PARTS)
+                     + f" | {r['accounted_us']:.2f} | {r['us_per_output_step'] - r['accounted_us']:.2f} |")
+    lines.append(end)
+    return "\n".join(lines) + "\n"
