@@ -393,6 +393,20 @@ _COMMAND_MODULES = (
 )
 
 
+def extend_bench(subparsers, what: str, help_text: str | None = None):
+    """The ``bench`` sub-parser with the choice ``what`` added (and ``help_text`` appended to its help), for a
+    module of :data:`_COMMAND_MODULES` that brings its own benchmark; None when there is no ``bench``."""
+    bench = subparsers.choices.get("bench")
+    if bench is None:
+        return None
+    for action in bench._actions:                                    # noqa: SLF001 - extend choices
+        if action.dest == "what" and action.choices is not None:
+            action.choices = tuple(action.choices) + (what,)
+            if help_text:
+                action.help = (action.help or "") + help_text
+    return bench
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gerotor-twin", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)

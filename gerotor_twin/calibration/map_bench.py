@@ -126,12 +126,10 @@ def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
 
 def add_parser(subparsers) -> None:
     """Teach the ``bench`` sub-command the choice ``maps`` (registered in ``cli._COMMAND_MODULES``)."""
-    bench = subparsers.choices.get("bench")
+    from ..cli import extend_bench
+    bench = extend_bench(subparsers, "maps")
     if bench is None:
         return
-    for action in bench._actions:                                    # noqa: SLF001 - extend choices
-        if action.dest == "what" and action.choices is not None:
-            action.choices = tuple(action.choices) + ("maps",)
     bench.add_argument("--maps", help="bench maps: comma-separated map names (default all: "
                                       + ", ".join(c.name for c in MAPS) + ")")
     bench.add_argument("--jobs", type=int, default=None, help="bench maps: worker processes (default: all cores)")

@@ -101,12 +101,10 @@ def bench_sweep(points: int = 8, workers=(1, 2), scheduler: str | None = None, k
 
 def add_parser(subparsers) -> None:
     """Teach the existing ``bench`` sub-command the choice ``sweep`` (registered in ``cli._COMMAND_MODULES``)."""
-    bench = subparsers.choices.get("bench")
+    from ..cli import extend_bench
+    bench = extend_bench(subparsers, "sweep")
     if bench is None:
         return
-    for action in bench._actions:                                    # noqa: SLF001 - extend choices
-        if action.dest == "what" and action.choices is not None:
-            action.choices = tuple(action.choices) + ("sweep",)
     bench.add_argument("--sweep-points", type=int, default=8, help="bench sweep: points per run (default 8)")
     bench.add_argument("--sweep-workers", default="1,2", help="bench sweep: worker counts to time (default 1,2)")
     bench.add_argument("--sweep-kind", default="geometry", help="bench sweep: geometry | operating (default geometry)")

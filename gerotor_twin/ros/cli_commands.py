@@ -20,13 +20,10 @@ def add_parser(subparsers) -> None:
     n.add_argument("ros_args", nargs=argparse.REMAINDER, help="--ros-args ...")
     n.set_defaults(func=_cmd_node)
 
-    bench = subparsers.choices.get("bench")
+    from ..cli import extend_bench
+    bench = extend_bench(subparsers, "node", "; node: twin node startup, CPU, RTF, latency, input accounting")
     if bench is None:
         return
-    for action in bench._actions:                                    # noqa: SLF001 - extend choices
-        if action.dest == "what" and action.choices is not None:
-            action.choices = tuple(action.choices) + ("node",)
-            action.help = (action.help or "") + "; node: twin node startup, CPU, RTF, latency, input accounting"
     bench.add_argument("--node-model", default="mobility", help="bench node: outer-gear model")
     bench.add_argument("--node-rpms", default=None,
                        help="bench node: comma-separated speeds [rpm] (default: the pump's top speed, "
