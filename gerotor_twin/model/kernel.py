@@ -58,13 +58,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
-from .flows import J_TCD, closing_ports, closing_share, rhs
+from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
