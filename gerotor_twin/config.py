@@ -120,7 +120,7 @@ class OperatingRange:
 
 ERROR_MEASURES = ("pressure", "log_density")
 #: How the mobility method's outer gear meets the pressure step (``numerics.gear_coupling``, model/gear_coupling.py)
-GEAR_COUPLINGS = ("stages", "partitioned")
+GEAR_COUPLINGS = ("stages", "partitioned", "constrained")
 
 FIXED_CENTRE_CONTACT_RULES = ("rotate", "none")
 CHAMBER_VOLUME_MODES = ("displaced", "nominal")
@@ -171,7 +171,9 @@ class Numerics:
     ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
     the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
     ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
-    over the next step (kept for comparison, docs/numerics.md).
+    over the next step (kept for comparison, docs/numerics.md); ``"constrained"``: as ``"stages"``, with the
+    tooth contact as a unilateral constraint on the gear's velocity inside the step and the overlap check's
+    pull-back along the same direction (model/tooth_constraint.py; under evaluation, docs/numerics.md).
     ``max_substep_attempts``: the sub-step attempts (accepted and rejected) one output step may take; past
     it the step is abandoned and reported (``model.pump.SolverFailure``): the bound on one call's work the
     node relies on (default 2000, ≈ 10 ms; the pump family takes 2–10; the tight references take 1e6).

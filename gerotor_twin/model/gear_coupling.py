@@ -43,21 +43,25 @@ import math
 
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
-from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
+from ..geometry.tables import ARM, FX, FY, GX, GY, HXX, HXY, HYY, TQ
 from .contact import column, locate
 from .loads import journal_torque
+from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
-           "linearise_with", "set_velocity", "close_pending", "gear_move"]
+           "linearise_with", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending", "gear_move"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
 #: accepted state; ∫ė dt over the output step so far [m]; length of the accepted sub-step whose ∫ė dt is
 #: pending [s]; shaft angle of the step start θ₀ [rad]; the angle [rad] whose table values ``ROW_RAW1`` holds,
-#: and 1 if it holds any
+#: and 1 if it holds any; the tooth constraint (``gear_coupling: constrained``, :mod:`.tooth_constraint`): on (1)
+#: or off (0), the reactions λ₁, λ₂ at the last right-hand side [N], and from ``GC_PAIR`` the two lobes' data of
+#: :func:`.tooth_constraint.constrained_velocity` (10 slots)
 (GC_ON, GC_V0X, GC_V0Y, GC_F0X, GC_F0Y, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_CX, GC_CY, GC_FCX, GC_FCY,
- GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0, GC_TH_RAW1, GC_RAW1_OK) = range(23)
-N_GEAR = 23
+ GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0, GC_TH_RAW1, GC_RAW1_OK,
+ GC_CON, GC_LAM1, GC_LAM2, GC_PAIR) = range(27)
+N_GEAR = GC_PAIR + 10
 #: columns of ``Workspace.gear_rows`` (N, 18): per chamber f_j = ∂V_j/∂e [m³/m] and g_j = ∂F/∂p_j [N/Pa] at θ₀,
 #: their slopes in θ over the output step [1/rad], both at the angle of the last right-hand side, and the
 #: table values (FX, FY, TQ) at θ₀ and at the step's end (reused as the next step's θ₀)
@@ -113,11 +117,30 @@ def coupled_load(pres, theta, n, p_atm, gc, rows):
 
 @njit(inline="always")
 def gear_velocity(fx, fy, gc):
-    """ė [m/s] of the linearised mobility at the load (fx, fy) [N]."""
+    """ė [m/s] of the linearised mobility at the load (fx, fy) [N]; with the tooth constraint on, the constrained
+    velocity (:func:`.tooth_constraint.constrained_velocity`) and λ₁, λ₂ in ``gc``."""
     dx = fx - gc[GC_F0X]
     dy = fy - gc[GC_F0Y]
-    return (gc[GC_V0X] + gc[GC_GXX] * dx + gc[GC_GXY] * dy,
-            gc[GC_V0Y] + gc[GC_GYX] * dx + gc[GC_GYY] * dy)
+    vx = gc[GC_V0X] + gc[GC_GXX] * dx + gc[GC_GXY] * dy
+    vy = gc[GC_V0Y] + gc[GC_GYX] * dx + gc[GC_GYY] * dy
+    if gc[GC_CON] != 0.0:
+        vx, vy, gc[GC_LAM1], gc[GC_LAM2] = constrained_velocity(vx, vy, gc[GC_PAIR:GC_PAIR + 10])
+    return vx, vy
+
+
+@njit(inline="always")
+def velocity_jacobian(gc):
+    """∂ė/∂F [m/(s·N)], row-major, at the last :func:`gear_velocity`: G; G_c where one contact holds (λ > 0); 0
+    where both hold (:func:`.tooth_constraint.projected_mobility`)."""
+    if gc[GC_CON] != 0.0:
+        c = GC_PAIR
+        if gc[GC_LAM1] > 0.0 and gc[GC_LAM2] > 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        if gc[GC_LAM1] > 0.0:
+            return projected_mobility(gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY], gc[c], gc[c + 1])
+        if gc[GC_LAM2] > 0.0:
+            return projected_mobility(gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY], gc[c + 2], gc[c + 3])
+    return gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY]
 
 
 @njit          # called, not inlined: inlined into the right-hand side it slowed the fixed centre too (3 %)
@@ -139,13 +162,14 @@ def gear_squeeze(theta, n, p_atm, p, beta, acc, gc, rows, jac, want_jac):
             pg = p[j] - p_atm
             dfx += pg * rows[j, ROW_DG]
             dfy += pg * rows[j, ROW_DG + 1]
-        dvx = gc[GC_GXX] * dfx + gc[GC_GXY] * dfy
-        dvy = gc[GC_GYX] * dfx + gc[GC_GYY] * dfy
+        gxx, gxy, gyx, gyy = velocity_jacobian(gc)
+        dvx = gxx * dfx + gxy * dfy
+        dvy = gyx * dfx + gyy * dfy
         for j in range(n):
             a = rows[j, ROW_NOW_F]
             b = rows[j, ROW_NOW_F + 1]
-            ax = gc[GC_GXX] * a + gc[GC_GYX] * b        # Gᵀ f_j
-            ay = gc[GC_GXY] * a + gc[GC_GYY] * b
+            ax = gxx * a + gyx * b                      # Gᵀ f_j
+            ay = gxy * a + gyy * b
             for k in range(n):
                 jac[j, k] -= (ax * rows[k, ROW_NOW_G] + ay * rows[k, ROW_NOW_G + 1]) * beta[k]
             jac[j, n + 1] -= rows[j, ROW_DF] * vx + rows[j, ROW_DF + 1] * vy + a * dvx + b * dvy
@@ -214,7 +238,39 @@ def set_velocity(gc, fx, fy, v0, v1, v2, d):
     gc[GC_DEX] = 0.0
     gc[GC_DEY] = 0.0
     gc[GC_PEND] = 0.0
+    gc[GC_CON] = 0.0
+    gc[GC_LAM1] = 0.0
+    gc[GC_LAM2] = 0.0
     gc[GC_ON] = 1.0
+
+
+@njit(inline="always")
+def set_constraint(ex, ey, theta, h, km, gc):
+    """Switch the tooth constraint on for the output step of h [s] that ends at shaft angle θ [rad], the gear at
+    (ex, ey) [m]: the two lobes whose gaps (inner gear unturned) are smallest there, their normals, G n and the
+    rates r = g/h that hold each gap at zero at the step's end (Moreau's time-stepping, :mod:`.tooth_constraint`).
+    Call after :func:`set_velocity` (G)."""
+    tab, pc = km.tab, km.pc
+    g1 = g2 = math.inf
+    n1x = n1y = n2x = n2y = 0.0
+    for k in range(pc.n):
+        i0, i1, f = locate(tab, theta + k * tab.shift)
+        c0 = column(tab, GX, i0, i1, f)
+        c1 = column(tab, GY, i0, i1, f)
+        cxx = column(tab, HXX, i0, i1, f)
+        cxy = column(tab, HXY, i0, i1, f)
+        cyy = column(tab, HYY, i0, i1, f)
+        g = pc.tip_clearance + c0 * ex + c1 * ey + 0.5 * (cxx * ex * ex + 2.0 * cxy * ex * ey + cyy * ey * ey)
+        nx = c0 + cxx * ex + cxy * ey                  # .contact.gap_value (γ = 0) and .tooth_constraint.gap_normal
+        ny = c1 + cxy * ex + cyy * ey
+        if g < g1:
+            g2, n2x, n2y = g1, n1x, n1y
+            g1, n1x, n1y = g, nx, ny
+        elif g < g2:
+            g2, n2x, n2y = g, nx, ny
+    contact_pair(gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY], n1x, n1y, n2x, n2y, g1 / h, g2 / h,
+                 gc[GC_PAIR:GC_PAIR + 10])
+    gc[GC_CON] = 1.0
 
 
 @njit(inline="always")
@@ -228,6 +284,8 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     d = load_step(fx, fy)
     set_velocity(gc, fx, fy, mobility_kernel(ex, ey, fx, fy, omega2, bp),
                  mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
+    if pc.gear_constrained and h > 0.0:
+        set_constraint(ex, ey, theta + omega * h, h, km, gc)
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):
@@ -239,6 +297,8 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     k, bp = bearing.kernel, bearing.params
     set_velocity(gc, fx, fy, k(ex, ey, fx, fy, omega2, bp), k(ex, ey, fx + d, fy, omega2, bp),
                  k(ex, ey, fx, fy + d, omega2, bp), d)
+    if km.pc.gear_constrained and h > 0.0:
+        set_constraint(ex, ey, theta + omega * h, h, km, gc)
 
 
 @njit(inline="always")

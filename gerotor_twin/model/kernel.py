@@ -63,11 +63,13 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
-from .gear_coupling import GC_CX, GC_CY, GC_DEX, GC_DEY, GC_ON, GC_PEND, close_pending, gear_move, linearise, linearise_with
+from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
+                            close_pending, gear_move, linearise, linearise_with)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
 from .step_control import error_norm, error_weights, step_factor, update_range
+from .tooth_constraint import pull_back_along
 from .volumes import move_volumes
 
 # ------------------------------------------------------------------ outputs
@@ -432,6 +434,9 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         elif move == MOVE_FIXED:
             fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
         ex0, ey0 = ex, ey
+        if coupled and pc.gear_constrained:        # back onto the teeth along G n, as inside the step
+            ex, ey, _ok = pull_back_along(ws.cmat, pc.tip_clearance, ex, ey, ws.gear[GC_GXX], ws.gear[GC_GXY],
+                                          ws.gear[GC_GYX], ws.gear[GC_GYY], ws.gear[GC_PAIR:GC_PAIR + 10])
         ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, True)
         move_volumes(km.tab, ws.disp, ex, ey, h)
         if ex != ex0 or ey != ey0:

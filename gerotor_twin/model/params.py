@@ -101,6 +101,7 @@ class PumpConstants(NamedTuple):
     laminar_delta: float = 0.2    #: Merritt's laminar flow coefficient δ (Cd = δ√Re) [-]
     closing_tolerance: float = 1.0  #: factor on ``tolerance`` where a delivery port is closing (numerics) [-]
     gear_in_stages: bool = False  #: the mobility gear's squeeze inside the ROS2 stages (numerics.gear_coupling) [-]
+    gear_constrained: bool = False  #: the tooth contact as a constraint on the gear in the stages (gear_coupling) [-]
 
 
 class KernelModel(NamedTuple):
@@ -196,7 +197,8 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
         tolerance=n.tolerance, error_measure=measure,
         log_density_tolerance=n.log_density_tolerance, closing_tolerance=n.closing_tolerance,
         orifice_law=ORIFICE_LAWS[config.orifice.law], laminar_delta=config.orifice.laminar_delta,
-        gear_in_stages=n.gear_coupling == "stages")
+        gear_in_stages=n.gear_coupling in ("stages", "constrained"),
+        gear_constrained=n.gear_coupling == "constrained")
     return typed(KernelModel(tab=tab, pc=pc, eos=state_equation(f, config.fluid_model, config.air)))
 
 
