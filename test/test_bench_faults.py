@@ -64,7 +64,7 @@ def test_wear_lowers_the_flow_more_at_high_pressure(healthy_pressures, kind, to,
     so the recorded flow lies below the healthy pump's, by more at 25 bar than at 5 bar (leakage grows with
     the pressure difference).  Measured at 1000 rpm (2026-12-04): tip ×2 1.5 % / 6.1 %, lateral ×1.3
     6.5 % / 41 %, housing ×3 0.10 % / 0.57 %.  The housing clearance does not move the outer gear here: it
-    rests on the inner gear (the kernel's gear contact), so its eccentricity stays where it was (33–37 µm at
+    rests on the inner gear (the kernel's gear contact), so its eccentricity stays where it was (32–37 µm at
     these points); the larger film changes the gear's load path and the tip gaps a little."""
     faulty, res = _run(PRESSURES, (Fault(kind, to, 0.0, 0.0),))
     low, high = (_flow_deficit(healthy_pressures, faulty, w) for w in (LOW, HIGH))
@@ -151,7 +151,7 @@ def test_flowmeter_drift_grows_the_recorded_to_true_ratio(sensor_faults_run):
 def test_metadata_holds_the_fault_truth(tmp_path):
     """Behaviour: ``synth-bench --fault`` records each fault resolved (kind, severity, unit, start, ramp, end),
     its values every 0.1 s and the count of missing speed samples in the bag's metadata; read back with the
-    project's reader they are the faults of the command line; the command is stored with the options."""
+    project's reader they are the faults of the command line; the command is stored with every fault setting."""
     out = tmp_path / "f.mcap"
     assert main(["synth-bench", "--profile", "test", "-o", str(out), "--quiet", "--fault",
                  "tip_wear,speed_dropout", "--fault-to", "1.4,0.5", "--fault-start", "0.1"]) == 0
@@ -164,7 +164,8 @@ def test_metadata_holds_the_fault_truth(tmp_path):
     np.testing.assert_allclose(series["tip_wear"], [1.0, 1.0, 1.0 + 0.4 / 3, 1.0 + 0.8 / 3, 1.4], rtol=1e-12)
     assert series["speed_dropout"] == [0.0, 0.5, 0.5, 0.5, 0.5]
     assert meta["speed_samples_dropped"] == "15"           # 30 samples from 0.1 s on (the one at 0.1 s included)
-    assert "--fault tip_wear,speed_dropout --fault-to 1.4,0.5 --fault-start 0.1" in meta["command"]
+    assert meta["command"].endswith("--fault tip_wear,speed_dropout --fault-to 1.4,0.5 --fault-start 0.1,0.1 "
+                                    "--fault-ramp 0.3,0")
 
 
 def test_no_fault_writes_no_fault_metadata():

@@ -24,13 +24,13 @@ def _wear_args(spec) -> list[str]:
     return ["--wear-to", f"{spec.wear_clearance_factor_end:g}", "--wear-start", f"{spec.wear_start_s:g}"]
 
 
-def _fault_args(args) -> list[str]:
-    """The fault options of the command line stored in the file, as given (none without ``--fault``)."""
-    if args.fault is None:
+def _fault_args(scenario) -> list[str]:
+    """The fault options of the command line stored in the file, every value spelled out (none without faults)."""
+    if not scenario:
         return []
-    pairs = (("--fault", args.fault), ("--fault-to", args.fault_to), ("--fault-start", args.fault_start),
-             ("--fault-ramp", args.fault_ramp))
-    return [x for option, value in pairs if value is not None for x in (option, value)]
+    f = scenario.faults
+    return ["--fault", ",".join(x.kind for x in f), "--fault-to", ",".join(f"{x.to:g}" for x in f),
+            "--fault-start", ",".join(f"{x.start_s:g}" for x in f), "--fault-ramp", ",".join(f"{x.ramp_s:g}" for x in f)]
 
 
 def _profile(args, config):
@@ -61,7 +61,7 @@ def _spec(args, bench_pump):
     return spec if bench_pump is None else bench_pump.bench_spec(spec)
 
 
-def _command(args, spec, profile, out: Path) -> str:
+def _command(args, spec, profile, out: Path, scenario) -> str:
     """The command line stored in the file: every setting spelled out."""
     which = ["--profile-file", args.profile_file] if args.profile_file is not None else ["--profile", profile.name]
     pump = (["--bench-pump", args.bench_pump] if args.bench_pump is not None
@@ -70,7 +70,7 @@ def _command(args, spec, profile, out: Path) -> str:
                           "--seed", str(spec.seed), "--bearing", spec.bearing, *pump,
                           "--speed-rate", f"{spec.speed_rate_hz:g}", "--pressure-rate", f"{spec.pressure_rate_hz:g}",
                           "--flow-rate", f"{spec.flow_rate_hz:g}", "--temperature-rate",
-                          f"{spec.temperature_rate_hz:g}"] + _wear_args(spec) + _fault_args(args))
+                          f"{spec.temperature_rate_hz:g}"] + _wear_args(spec) + _fault_args(scenario))
     if args.config:
         command += " --config " + shlex.quote(args.config)
     return command
@@ -86,14 +86,14 @@ def cmd_synth_bench(args) -> int:
     faults = parse_faults(args.fault, args.fault_to, args.fault_start, args.fault_ramp)
     config = load_config(args.config)
     profile = _profile(args, config)
-    FaultScenario(faults, profile.duration_s)          # a start after the end refused before the output
+    scenario = FaultScenario(faults, profile.duration_s)     # a start after the end refused before the output
     bench_pump = None if args.bench_pump is None else load_bench_pump(args.bench_pump)
     spec = _spec(args, bench_pump)
     out = Path(args.output) if args.output else default_output_name(profile)
     if out.exists() and not args.overwrite:
         raise InputError("--output", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
-    command = _command(args, spec, profile, out)
+    command = _command(args, spec, profile, out, scenario)
     res = synthesize(profile, out, spec, config=config, overwrite=args.overwrite, command=command,
                      progress=None if args.quiet else sys.stderr, bench_pump=bench_pump, faults=faults)
     n = sum(res["message_counts"].values())
