@@ -148,16 +148,19 @@ def test_flowmeter_drift_grows_the_recorded_to_true_ratio(sensor_faults_run):
     np.testing.assert_allclose(q1 / q0, 1.0 + 0.1 * np.clip((t - 0.05) / 0.35, 0.0, 1.0), rtol=1e-12)
 
 
-def test_metadata_holds_the_fault_truth(tmp_path):
+def test_metadata_holds_the_fault_truth(tmp_path, capsys):
     """Behaviour: ``synth-bench --fault`` records each fault resolved (kind, severity, unit, start, ramp, end),
     its values every 0.1 s and the count of missing speed samples in the bag's metadata; read back with the
     project's reader they are the faults of the command line; the command is stored with every fault setting."""
-    out = tmp_path / "f.mcap"
-    assert main(["synth-bench", "--profile", "test", "-o", str(out), "--quiet", "--fault",
-                 "tip_wear,speed_dropout", "--fault-to", "1.4,0.5", "--fault-start", "0.1"]) == 0
+    out, truth = tmp_path / "f.mcap", tmp_path / "truth.json"
+    assert main(["synth-bench", "--profile", "test", "-o", str(out), "--quiet", "--fault", "tip_wear,speed_dropout",
+                 "--fault-to", "1.4,0.5", "--fault-start", "0.1", "--json", str(truth)]) == 0
+    assert "fault tip_wear: 1.4 (x tooth-tip clearance) from 0.1 s, reached at 0.4 s" in capsys.readouterr().out
+    assert json.loads(truth.read_text())["fault_truth"]["tip_wear"][-1] == 1.4
     meta = metadata(out)[EMULATOR_METADATA]
     recorded = yaml.safe_load(meta["faults"])
-    assert recorded == [Fault("tip_wear", 1.4, 0.1).resolved(0.4).as_dict(), Fault("speed_dropout", 0.5, 0.1, 0.0).as_dict()]
+    assert recorded == [Fault("tip_wear", 1.4, 0.1).resolved(0.4).as_dict(),
+                        Fault("speed_dropout", 0.5, 0.1, 0.0).as_dict()]
     assert recorded[0]["unit"] == FAULT_KINDS["tip_wear"].unit and recorded[0]["end_s"] == pytest.approx(0.4)
     series = json.loads(meta["fault_series"])
     np.testing.assert_allclose(series["t_s"], np.arange(5) * 0.1)

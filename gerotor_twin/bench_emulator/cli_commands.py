@@ -30,7 +30,8 @@ def _fault_args(scenario) -> list[str]:
         return []
     f = scenario.faults
     return ["--fault", ",".join(x.kind for x in f), "--fault-to", ",".join(f"{x.to:g}" for x in f),
-            "--fault-start", ",".join(f"{x.start_s:g}" for x in f), "--fault-ramp", ",".join(f"{x.ramp_s:g}" for x in f)]
+            "--fault-start", ",".join(f"{x.start_s:g}" for x in f),
+            "--fault-ramp", ",".join(f"{x.ramp_s:g}" for x in f)]
 
 
 def _profile(args, config):
@@ -80,7 +81,7 @@ def cmd_synth_bench(args) -> int:
     from gerotor_twin.bench_emulator import synthesize
     from gerotor_twin.bench_emulator.bench_pump import load_bench_pump
     from gerotor_twin.bench_emulator.emulator import default_output_name
-    from gerotor_twin.bench_emulator.faults import FaultScenario, parse_faults
+    from gerotor_twin.bench_emulator.faults import FAULT_KINDS, FaultScenario, parse_faults
     from gerotor_twin.config import load_config
 
     faults = parse_faults(args.fault, args.fault_to, args.fault_start, args.fault_ramp)
@@ -104,6 +105,9 @@ def cmd_synth_bench(args) -> int:
               f"{m3s_to_lpm(row['true_mean_flow_m3s']):7.3f} L/min, eta_v {row['true_volumetric_efficiency']:.4f}, "
               f"oil {row['oil_temperature_c']:.1f} °C"
               + (f", clearance factor {row['clearance_factor']:.4f}" if "clearance_factor" in row else ""))
+    for f in scenario.faults:
+        print(f"  fault {f.kind}: {f.to:g} ({FAULT_KINDS[f.kind].unit}) from {f.start_s:g} s, reached at "
+              f"{f.start_s + f.ramp_s:g} s")
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=2))
         print(f"wrote {args.json}")

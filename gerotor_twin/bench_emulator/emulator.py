@@ -36,6 +36,8 @@ from gerotor_twin.config import PumpConfig, load_config, parse_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import McapLog
 from gerotor_twin.io import messages as m
+from gerotor_twin.hydraulics.state_equation import convert_log_density
+from gerotor_twin.model.clearance_scale import scale_clearances, take_config
 from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
 from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
@@ -289,40 +291,21 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     model = PumpModel(cfg, spec.bearing)
     dt = 1.0 / spec.internal_rate_hz
     n_ticks = int(round(profile.duration_s * spec.internal_rate_hz))
-    t_grid = np.arange(n_ticks + 1) * dt
-    sp_w, sp_p = profile.setpoints(t_grid)
-    p_atm = cfg.fluid.atmospheric_pa
-    w_max = rpm_to_rad_s(cfg.range.max_speed_rpm)
     rng = noise_streams(spec.seed, ("speed", "pressure", "suction", "flow", "temperature", "latency"))
-
-    def suction(w: float) -> float:
-        return p_atm - spec.suction_drop_pa * (w / w_max) ** 2
-
-    # ---- run-in at the first set-point (not recorded)
-    bath = oil_bath(profile, spec)
-
-    def oil_k(t: float) -> float:         # true oil temperature of the emulated pump [K]
-        return celsius_to_kelvin(bath(t))
-
-    inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]), oil_k(0.0))
+    drive = BenchDrive(profile, spec, cfg, dt, n_ticks)
+    inp = drive.start()                     # run-in at the first set-point (not recorded)
     state = model.initial_state(inp, t=-spec.warmup_s)
     state, out = model.advance(state, spec.warmup_s, inp)
     q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
-    restriction = SuctionRestriction(scenario, model.theoretical_flow(w_max), dt, q_dc0)
-    motor = FirstOrderLag(spec.motor_tau_s, dt, sp_w[0])
-    valve = FirstOrderLag(spec.valve_tau_s, dt, sp_p[0])
+    drive.restriction = SuctionRestriction(scenario, model.theoretical_flow(drive.w_max), dt, q_dc0)
 
     resolved = None if bench_pump is None else bench_pump.resolved(nominal, spec)
     log = McapLog(output, metadata=file_metadata(profile, spec, cfg, command, resolved, scenario), overwrite=overwrite)
     for topic, msgtype in BENCH_TOPICS.items():
         log.add_topic(topic, msgtype, qos="sensor")
     show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
-    true_q = np.empty(n_ticks)
-    true_w = np.empty(n_ticks)
-    true_t = np.empty(n_ticks)
+    true = np.empty((5, n_ticks))           # delivered flow, speed, oil [°C], suction pressure, eccentricity
     true_c = np.full(n_ticks, spec.clearance_factor)
-    true_ps = np.empty(n_ticks)
-    true_e = np.empty(n_ticks)
     t0_ns = spec.start_time_ns
 
     def emit(topic: str, msg: dict, t_ns: int, write: bool = True) -> None:
@@ -330,30 +313,77 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         if write:
             log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
 
-    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, bath.start_c, state.theta, scenario)
+    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, drive.bath.start_c, state.theta, scenario)
     try:
         for k in range(n_ticks):
             true_c[k], state = update_pump(model, cfg, spec, scenario, dt, profile.duration_s, k, state)
-            w = max(0.0, motor(sp_w[k]))
-            pd = p_atm + valve(sp_p[k])
-            ps = suction(w) - restriction.drop(k * dt)
-            t_oil = oil_k(k * dt)
-            state, out = model.advance(state, dt, Inputs(w, ps, pd, t_oil))
-            restriction.feed(out.port_mass_in / dt)
+            inp = drive(k)
+            state, out = model.advance(state, dt, inp)
+            drive.restriction.feed(out.port_mass_in / dt)
             q_mean = tick_mean_flow(out)
-            true_q[k], true_w[k], true_t[k] = q_mean, w, kelvin_to_celsius(t_oil)
-            true_ps[k], true_e[k] = ps, math.hypot(*state.eccentricity)
+            true[:, k] = (q_mean, inp.omega, kelvin_to_celsius(inp.oil_temperature), inp.p_suction,
+                          math.hypot(*state.eccentricity))
             t = (k + 1) * dt
-            sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), pd, ps, float(out.delivery_flow[-1]), q_mean,
-                         true_t[k], state.theta)
+            sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), inp.p_delivery, inp.p_suction,
+                         float(out.delivery_flow[-1]), q_mean, true[2, k], state.theta)
             show(t)
     finally:
         counts = log.message_counts
         log.close()
     show(profile.duration_s, done=True)
     res = {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed, "message_counts": counts,
-           "truth": wear_truth(_truth(profile, cfg, model, true_q, true_w, true_t, dt), true_c, dt, spec)}
-    return res if not scenario else {**res, "fault_truth": fault_truth(scenario, cfg, dt, true_q, true_ps, true_e)}
+           "truth": wear_truth(_truth(profile, cfg, model, true[0], true[1], true[2], dt), true_c, dt, spec)}
+    return res if not scenario else {**res, "fault_truth": fault_truth(scenario, cfg, dt, true[0], true[3], true[4])}
+
+
+class BenchDrive:
+    """What the bench feeds the emulated pump each tick: the drive's speed and the delivery valve's pressure
+    following the profile's set-points through first-order lags (``spec.motor_tau_s``, ``spec.valve_tau_s``),
+    the suction pressure (the suction line's drop ∝ speed², ``spec.suction_drop_pa`` at ``range.max_speed_rpm``,
+    less a suction restriction fault's, :attr:`restriction`) and the oil bath's temperature (:func:`oil_bath`).
+
+    Parameters
+    ----------
+    profile : Profile
+        Set-points.
+    spec : BenchSpec
+        Emulator settings.
+    cfg : PumpConfig
+        The emulated pump (atmospheric pressure [Pa], range).
+    dt : float
+        Tick [s].
+    n_ticks : int
+        Ticks of the run.
+    """
+
+    def __init__(self, profile: Profile, spec: BenchSpec, cfg: PumpConfig, dt: float, n_ticks: int):
+        self.sp_w, self.sp_p = profile.setpoints(np.arange(n_ticks + 1) * dt)
+        self.spec, self.dt, self.p_atm = spec, dt, cfg.fluid.atmospheric_pa
+        self.w_max = rpm_to_rad_s(cfg.range.max_speed_rpm)
+        self.bath = oil_bath(profile, spec)
+        self.motor = FirstOrderLag(spec.motor_tau_s, dt, self.sp_w[0])
+        self.valve = FirstOrderLag(spec.valve_tau_s, dt, self.sp_p[0])
+        self.restriction: SuctionRestriction | None = None
+
+    def suction(self, w: float) -> float:
+        """Suction pressure at shaft speed ``w`` [rad/s] without a restriction fault [Pa absolute]."""
+        return self.p_atm - self.spec.suction_drop_pa * (w / self.w_max) ** 2
+
+    def oil_k(self, t: float) -> float:
+        """True oil temperature of the emulated pump at ``t`` [s] [K]."""
+        return celsius_to_kelvin(self.bath(t))
+
+    def start(self) -> Inputs:
+        """The inputs at the first set-point (the run-in's) [rad/s, Pa, Pa, K]."""
+        w0, p0 = self.sp_w[0], self.sp_p[0]
+        return Inputs(float(w0), self.suction(w0), self.p_atm + float(p0), self.oil_k(0.0))
+
+    def __call__(self, k: int) -> Inputs:
+        """The inputs over tick ``k`` (from 0) [rad/s, Pa, Pa, K]; the lags advance by one tick."""
+        w = max(0.0, self.motor(self.sp_w[k]))
+        pd = self.p_atm + self.valve(self.sp_p[k])
+        ps = self.suction(w) - self.restriction.drop(k * self.dt)
+        return Inputs(w, ps, pd, self.oil_k(k * self.dt))
 
 
 def checked_inputs(profile: Profile, spec: BenchSpec, config: PumpConfig | None, bench_pump: BenchPump | None,
@@ -417,7 +447,6 @@ def apply_wear(model: PumpModel, emulated: PumpConfig, spec: BenchSpec, dt: floa
         return spec.clearance_factor
     f = wear_factor(spec, (tick - tick % WEAR_UPDATE_TICKS) * dt, duration_s)
     if tick % WEAR_UPDATE_TICKS == 0:
-        from gerotor_twin.model.clearance_scale import scale_clearances
         scale_clearances(model, emulated, f / spec.clearance_factor)
     return f
 
@@ -433,9 +462,6 @@ def update_pump(model: PumpModel, emulated: PumpConfig, spec: BenchSpec, faults:
     t = (tick - tick % WEAR_UPDATE_TICKS) * dt
     f = wear_factor(spec, t, duration_s)
     if tick % WEAR_UPDATE_TICKS == 0:
-        from gerotor_twin.hydraulics.state_equation import convert_log_density
-        from gerotor_twin.model.clearance_scale import take_config
-
         old = model.kernel.eos
         take_config(model, faults.pump_config(emulated, t, f / spec.clearance_factor))
         if "air_ingress" in faults.by_kind:

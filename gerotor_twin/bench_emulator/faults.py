@@ -51,8 +51,10 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.model.clearance_scale import scaled_config
 
 from .bench_pump import _value
+from .sensors import FirstOrderLag
 
 __all__ = ["Fault", "FaultKind", "FaultScenario", "FAULT_KINDS", "PUMP_KINDS", "SUCTION_FLOW_TAU_S",
            "parse_faults"]
@@ -272,8 +274,6 @@ class FaultScenario:
     def pump_config(self, emulated, t_s: float, wear: float = 1.0):
         """The emulated pump at ``t_s`` [s]: ``emulated`` (a ``PumpConfig``) with the worn clearances (× ``wear``
         on tip and lateral, the ``--wear-to`` scenario's factor relative to the start [-]) and the free air."""
-        from gerotor_twin.model.clearance_scale import scaled_config
-
         return scaled_config(emulated, tip=wear * self.value("tip_wear", t_s),
                              lateral=wear * self.value("lateral_wear", t_s), housing=self.value("housing_wear", t_s),
                              air_fraction=self.value("air_ingress", t_s, emulated.air.air_fraction))
@@ -340,8 +340,6 @@ class SuctionRestriction:
     """
 
     def __init__(self, scenario: FaultScenario, q_rated: float, dt: float, q0: float):
-        from .sensors import FirstOrderLag
-
         self.fault = scenario.by_kind.get("suction_restriction")
         self.q_rated = q_rated
         self.flow = FirstOrderLag(SUCTION_FLOW_TAU_S, dt, q0)
