@@ -72,6 +72,19 @@ def test_wear_lowers_the_flow_more_at_high_pressure(healthy_pressures, kind, to,
     assert res["fault_truth"][kind] == [to] * len(res["fault_truth"]["t_s"])
 
 
+def test_housing_wear_reaches_the_kernel_and_the_outer_gear_film(cfg):
+    """Behaviour: the worn housing clearance replaces the kernel's and rebuilds the short-bearing film of a
+    running model (its state stays valid); the tip and lateral clearances stay."""
+    from gerotor_twin.model.clearance_scale import scaled_config, take_config
+    from gerotor_twin.model.pump import PumpModel
+
+    model = PumpModel(cfg, "short")
+    c = cfg.clearances
+    take_config(model, scaled_config(cfg, housing=2.0))
+    assert model.bearing_geometry.clearance_m == model.kernel.pc.housing_clearance == 2.0 * c.housing_radial_m
+    assert model.config.clearances.tooth_tip_m == c.tooth_tip_m and model.config.clearances.lateral_m == c.lateral_m
+
+
 def test_air_ingress_lowers_the_flow_and_raises_the_free_air(healthy_pressures, cfg):
     """Behaviour: free air rising from the pump's 0.1 % to 5 % (ramp over the run) fills each chamber with
     more gas at suction pressure, compressed away on delivery: the recorded flow falls, by more at the end

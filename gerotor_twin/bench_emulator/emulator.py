@@ -15,7 +15,8 @@ the inputs held, then the sensors see the result: an encoder (quantized,
 differenced over 10 ms), fast pressure transducers that see the flow ripple
 through the delivery-line impedance, a flow meter with its own time
 constant, a slow thermometer, Gaussian noise on each, and a recorder
-latency.  Output: an MCAP file with the bench topics of DESIGN.md, rosbag2
+latency.  Fault scenarios (:mod:`.faults`) wear the pump, add air, restrict the suction or
+corrupt the sensors during the run.  Output: an MCAP file with the bench topics of DESIGN.md, rosbag2
 conventions (via :mod:`gerotor_twin.io`), identical bytes for the same seed,
 profile and software versions.
 """
@@ -46,7 +47,8 @@ from .bench_pump import BenchPump
 from .faults import Fault, FaultScenario, SuctionRestriction
 from .sensors import BenchSpec, Encoder, FirstOrderLag, OilBath, noise_streams
 
-__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "BenchSensors", "emulated_config", "oil_bath", "synthesize"]
+__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "BenchDrive", "BenchSensors", "emulated_config", "oil_bath",
+           "synthesize"]
 
 #: Topics and types written (DESIGN.md, bench inputs of the twin).
 BENCH_TOPICS = {
@@ -133,7 +135,7 @@ def file_metadata(profile: Profile, spec: BenchSpec, cfg: PumpConfig, command: s
 def fault_metadata(faults: FaultScenario, spec: BenchSpec, cfg: PumpConfig) -> dict[str, str]:
     """The faults' truth (none without faults): ``faults``, each fault resolved (YAML: kind, ``to``, unit,
     meaning, start, ramp, end [s]); ``fault_series``, every fault's value every :data:`WEAR_UPDATE_TICKS`
-    ticks (JSON: ``t_s`` and one list per kind, unit per kind); ``speed_samples_dropped``, how many
+    ticks (JSON: ``t_s``, ``tick`` and one list per kind, unit per kind); ``speed_samples_dropped``, how many
     shaft-speed samples are missing."""
     if not faults:
         return {}

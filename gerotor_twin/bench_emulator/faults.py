@@ -14,8 +14,8 @@ kind                     ``to`` means                            allowed        
 ``lateral_wear``         lateral clearance × the emulated        [1, 3] [-]                1.3
                          pump's
 ``housing_wear``         outer gear–housing radial clearance ×   [1, 3] [-]                2
-                         the emulated pump's (the outer gear's
-                         eccentricity grows)
+                         the emulated pump's (kernel and the
+                         outer gear's film)
 ``air_ingress``          free-air volume fraction at             [1e-6, 0.1] [-]           0.03
                          atmospheric pressure (from the
                          emulated pump's ``mixture.air_fraction``)
@@ -40,8 +40,11 @@ n samples ⌊Σ fraction(tᵢ)⌋ are missing (a step of fraction f from the sta
 The gain error of ``flowmeter_drift`` multiplies the whole recorded sample (bias and noise
 included): recorded / healthy = 1 + g(t), a drift of ``to / ramp_s`` per second during the ramp.
 
-What the kernel cannot emulate: wear of one lobe or one tooth (one tooth-tip clearance for every
-lobe), and air ingress with ``fluid_model: paper`` (no free air in eq. (23)): refused.
+What the kernel cannot emulate: an outer-gear eccentricity that grows with housing wear (the outer gear
+rests on the inner gear, the kernel's gear contact holds it where the tooth contact puts it, so a larger
+housing clearance shows only as a small flow loss at high pressure); wear of one lobe or one tooth (one
+tooth-tip clearance for every lobe); air ingress with ``fluid_model: paper`` (no free air in eq. (23)):
+refused.  A fault holds its severity to the end of the run (a dropout window that ends is not a kind).
 """
 from __future__ import annotations
 
@@ -172,6 +175,8 @@ class Fault:
         """The fault's value at ``t_s`` [s] (unit of the kind): from the value without it (``none``, default
         the kind's) towards ``to``."""
         base = FAULT_KINDS[self.kind].none if none is None else none
+        if base is None:
+            raise ValueError(f"{self.kind}: the value without the fault depends on the pump; pass it as none")
         return base + (self.to - base) * self.progress(t_s)
 
     def as_dict(self) -> dict:
