@@ -99,6 +99,21 @@ def test_air_ingress_lowers_the_flow_and_raises_the_free_air(healthy_pressures, 
     assert 0.0 < early < 0.02 < late, (early, late)
 
 
+def test_air_ingress_lowers_the_flow_more_at_low_suction_pressure():
+    """Behaviour: the same 5 % of free air (at atmospheric pressure) takes twice the volume at half of it, so
+    with the suction line's drop raised to put the suction at ≈ 51 kPa (1000 rpm / 10 bar) the flow lost to
+    the air is about twice that at ≈ 101 kPa.  Measured (2026-12-04): 6.7 % and 14.3 %."""
+    from dataclasses import replace
+
+    one = Profile("one", (Segment(0.4, 1000, 10),))
+    deficits = []
+    for drop in (5.0e3, 4.5e5):                  # suction-line drop at the top speed [Pa]; 1/9 of it at 1000 rpm
+        spec = replace(SPEC, suction_drop_pa=drop)
+        healthy, faulty = (_run(one, faults, spec)[0] for faults in ((), (Fault("air_ingress", 0.05, 0.0, 0.0),)))
+        deficits.append(_flow_deficit(healthy, faulty, LOW))
+    assert 0.03 < deficits[0] and deficits[1] > 1.7 * deficits[0], deficits
+
+
 def test_suction_restriction_lowers_the_suction_pressure_with_the_flow(healthy_speeds, cfg):
     """Behaviour and closed form: a restriction of 6e4 Pa at rated flow (a step at the start) lowers the
     recorded suction pressure by to·(Q/Q_rated)², Q the pump's intake flow (here within 10 % of the healthy
