@@ -65,7 +65,7 @@ def test_wear_lowers_the_flow_more_at_high_pressure(healthy_pressures, kind, to,
     the pressure difference).  Measured at 1000 rpm (2026-12-04): tip ×2 1.5 % / 6.1 %, lateral ×1.3
     6.5 % / 41 %, housing ×3 0.10 % / 0.57 %.  The housing clearance does not move the outer gear here: it
     rests on the inner gear (the kernel's gear contact), so its eccentricity stays where it was (32–37 µm at
-    these points); the larger film changes the gear's load path and the tip gaps a little."""
+    these points); the flow loss comes through the kernel's housing clearance."""
     faulty, res = _run(PRESSURES, (Fault(kind, to, 0.0, 0.0),))
     low, high = (_flow_deficit(healthy_pressures, faulty, w) for w in (LOW, HIGH))
     assert low > low_min and high > high_min and high > 3 * low, (low, high)
