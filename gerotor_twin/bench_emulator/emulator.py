@@ -15,7 +15,8 @@ the inputs held, then the sensors see the result: an encoder (quantized,
 differenced over 10 ms), fast pressure transducers that see the flow ripple
 through the delivery-line impedance, a flow meter with its own time
 constant, a slow thermometer, Gaussian noise on each, and a recorder
-latency.  Output: an MCAP file with the bench topics of DESIGN.md, rosbag2
+latency.  Fault scenarios (:mod:`.faults`) wear the pump, add air, restrict the suction or
+corrupt the sensors during the run.  Output: an MCAP file with the bench topics of DESIGN.md, rosbag2
 conventions (via :mod:`gerotor_twin.io`), identical bytes for the same seed,
 profile and software versions.
 """
@@ -25,6 +26,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import IO, Callable
 
@@ -35,14 +37,18 @@ from gerotor_twin.config import PumpConfig, load_config, parse_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import McapLog
 from gerotor_twin.io import messages as m
+from gerotor_twin.hydraulics.state_equation import convert_log_density
+from gerotor_twin.model.clearance_scale import scale_clearances, take_config
 from gerotor_twin.model.pump import BEARING_MODELS, Inputs, PumpModel
 from gerotor_twin.units import celsius_to_kelvin, kelvin_to_celsius, rpm_to_rad_s
 
 from .profiles import Profile
 from .bench_pump import BenchPump
+from .faults import Fault, FaultScenario, SuctionRestriction
 from .sensors import BenchSpec, Encoder, FirstOrderLag, OilBath, noise_streams
 
-__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "BenchSensors", "emulated_config", "oil_bath", "synthesize"]
+__all__ = ["BENCH_TOPICS", "EMULATOR_METADATA", "BenchDrive", "BenchSensors", "emulated_config", "oil_bath",
+           "synthesize"]
 
 #: Topics and types written (DESIGN.md, bench inputs of the twin).
 BENCH_TOPICS = {
@@ -112,10 +118,10 @@ def profile_metadata(profile: Profile) -> dict[str, str]:
 
 
 def file_metadata(profile: Profile, spec: BenchSpec, cfg: PumpConfig, command: str,
-                  bench_pump: BenchPump | None) -> dict[str, dict[str, str]]:
+                  bench_pump: BenchPump | None, faults: FaultScenario = FaultScenario()) -> dict[str, dict[str, str]]:
     """The file's metadata record :data:`EMULATOR_METADATA`: the profile, the emulator settings, the
-    command, the emulated pump's config and, with a bench pump, its resolved description (YAML: every
-    value used) and the file's text."""
+    command, the emulated pump's config, with a bench pump its resolved description (YAML: every
+    value used) and the file's text, and with faults their truth (:func:`fault_metadata`)."""
     meta = {"synthetic": "true", **profile_metadata(profile),
             "spec": json.dumps(spec.as_dict(), sort_keys=True), "seed": str(spec.seed),
             "command": command, "emulated_pump_config": yaml.safe_dump(cfg.to_dict(), sort_keys=False)}
@@ -123,7 +129,21 @@ def file_metadata(profile: Profile, spec: BenchSpec, cfg: PumpConfig, command: s
         meta["bench_pump"] = yaml.safe_dump(bench_pump.as_dict(), sort_keys=False, allow_unicode=True)
         if bench_pump.source:
             meta["bench_pump_file_text"] = bench_pump.source
-    return {EMULATOR_METADATA: meta}
+    return {EMULATOR_METADATA: {**meta, **fault_metadata(faults, spec, cfg)}}
+
+
+def fault_metadata(faults: FaultScenario, spec: BenchSpec, cfg: PumpConfig) -> dict[str, str]:
+    """The faults' truth (none without faults): ``faults``, each fault resolved (YAML: kind, ``to``, unit,
+    meaning, start, ramp, end [s]); ``fault_series``, every fault's value every :data:`WEAR_UPDATE_TICKS`
+    ticks (JSON: ``t_s``, ``tick`` and one list per kind, unit per kind); ``speed_samples_dropped``, how many
+    shaft-speed samples are missing."""
+    if not faults:
+        return {}
+    dt = 1.0 / spec.internal_rate_hz
+    dropped = faults.speed_dropped(spec.decimation(spec.speed_rate_hz, "speed_rate_hz"), dt)
+    return {"faults": yaml.safe_dump(faults.as_dict(), sort_keys=False),
+            "fault_series": json.dumps(faults.series(WEAR_UPDATE_TICKS, dt, cfg.air.air_fraction)),
+            "speed_samples_dropped": str(int(dropped.sum()))}
 
 
 def _progress_printer(stream: IO[str] | None, label: str, total_s: float) -> Callable[[float], None]:
@@ -170,11 +190,15 @@ class BenchSensors:
         Oil temperature at the start [°C].
     theta0 : float
         Shaft angle at the start [rad].
+    faults : FaultScenario
+        The run's faults; the sensor kinds (pressure offset, speed dropout, flow-meter drift) act here.
     """
 
     def __init__(self, spec: BenchSpec, dt: float, rng: dict, emit: Callable, inp: Inputs, q0: float,
-                 temp0_c: float, theta0: float):
-        self.spec, self.rng, self.emit = spec, rng, emit
+                 temp0_c: float, theta0: float, faults: FaultScenario = FaultScenario()):
+        self.spec, self.rng, self.emit, self.dt = spec, rng, emit, dt
+        self.offset = faults.by_kind.get("pressure_offset")
+        self.drift = faults.by_kind.get("flowmeter_drift")
         self.dec = {"speed": spec.decimation(spec.speed_rate_hz, "speed_rate_hz"),
                     "pressure": spec.decimation(spec.pressure_rate_hz, "pressure_rate_hz"),
                     "flow": spec.decimation(spec.flow_rate_hz, "flow_rate_hz"),
@@ -187,6 +211,7 @@ class BenchSensors:
         self.thermo = FirstOrderLag(spec.temperature_tau_s, dt, temp0_c)
         self.encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))),
                                dt, theta0, inp.omega)
+        self.speed_dropped = faults.speed_dropped(self.dec["speed"], dt) if "speed_dropout" in faults.by_kind else None
 
     def _noise(self, stream: str, sigma: float) -> float:
         return self.rng[stream].normal(0.0, sigma)
@@ -195,7 +220,7 @@ class BenchSensors:
              theta: float) -> None:
         """Tick ``i`` (from 1), stamped ``t_ns`` [ns]: the true delivery and suction pressures [Pa],
         instantaneous and tick-mean delivery flow [m³/s], oil temperature [°C] and shaft angle [rad]."""
-        s, dec = self.spec, self.dec
+        s, dec, t = self.spec, self.dec, i * self.dt
         p_meas = self.delivery(pd + s.ripple_impedance * (q_inst - self.ripple_dc(q_mean)))
         s_meas = self.suction(ps - 0.1 * s.ripple_impedance * (q_inst - self.ripple_dc.y))
         q_meas = self.flow(q_mean)
@@ -205,9 +230,12 @@ class BenchSensors:
         if i % dec["speed"] == 0:
             w_meas += s.speed_bias_rad_s + (self._noise("speed", s.speed_noise_rad_s) if s.speed_noise_rad_s > 0
                                             else 0.0)
+            dropped = self.speed_dropped is not None and self.speed_dropped[i // dec["speed"] - 1]
             self.emit("/bench/shaft_speed", m.joint_state(t_ns, name=[SHAFT_JOINT], position=[angle],
-                                                          velocity=[w_meas]), t_ns)
+                                                          velocity=[w_meas]), t_ns, not dropped)
         if i % dec["pressure"] == 0:
+            if self.offset is not None:
+                p_meas += self.offset.value(t)
             self.emit("/bench/delivery_pressure", m.fluid_pressure(
                 t_ns, p_meas + s.pressure_bias_pa + self._noise("pressure", s.pressure_noise_pa),
                 variance=s.pressure_noise_pa ** 2), t_ns)
@@ -215,7 +243,10 @@ class BenchSensors:
                 t_ns, s_meas + self._noise("suction", s.suction_noise_pa), variance=s.suction_noise_pa ** 2), t_ns)
         if i % dec["flow"] == 0:
             sigma = math.hypot(s.flow_noise_rel * q_meas, s.flow_noise_m3s)
-            self.emit("/bench/delivery_flow", m.float64(q_meas + s.flow_bias_m3s + self._noise("flow", sigma)), t_ns)
+            reading = q_meas + s.flow_bias_m3s + self._noise("flow", sigma)
+            if self.drift is not None:
+                reading *= 1.0 + self.drift.value(t)
+            self.emit("/bench/delivery_flow", m.float64(reading), t_ns)
         if i % dec["temperature"] == 0:
             self.emit("/bench/oil_temperature", m.temperature(
                 t_ns, temp + s.temperature_bias_c + self._noise("temperature", s.temperature_noise_c),
@@ -224,7 +255,7 @@ class BenchSensors:
 
 def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, config: PumpConfig | None = None,
                overwrite: bool = False, command: str = "", progress: IO[str] | None = sys.stderr,
-               bench_pump: BenchPump | None = None) -> dict:
+               bench_pump: BenchPump | None = None, faults: tuple[Fault, ...] = ()) -> dict:
     """Run the emulated bench along ``profile`` and record it to MCAP.
 
     Parameters
@@ -248,83 +279,149 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
     bench_pump : BenchPump, optional
         How the emulated pump differs from ``config`` in form (:mod:`.bench_pump`); its deviations
         come before ``spec.clearance_factor``, and its resolved description goes into the metadata.
+    faults : sequence of Fault
+        Fault scenarios (:mod:`.faults`), at most one per kind; their truth goes into the metadata.
 
     Returns
     -------
     dict
-        Message counts, duration [s] and the ground truth per plateau (true mean delivery
-        flow [m³/s], theoretical flow [m³/s], volumetric efficiency [-]).
+        Message counts, duration [s], the ground truth per plateau (true mean delivery
+        flow [m³/s], theoretical flow [m³/s], volumetric efficiency [-]) and, with faults,
+        ``fault_truth`` (:func:`fault_truth`).
+    """
+    nominal, cfg, scenario = checked_inputs(profile, spec, config, bench_pump, faults)
+    model = PumpModel(cfg, spec.bearing)
+    dt = 1.0 / spec.internal_rate_hz
+    n_ticks = int(round(profile.duration_s * spec.internal_rate_hz))
+    rng = noise_streams(spec.seed, ("speed", "pressure", "suction", "flow", "temperature", "latency"))
+    drive = BenchDrive(profile, spec, cfg, dt, n_ticks)
+    inp = drive.start()                     # run-in at the first set-point (not recorded)
+    state = model.initial_state(inp, t=-spec.warmup_s)
+    state, out = model.advance(state, spec.warmup_s, inp)
+    q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
+    drive.restriction = SuctionRestriction(scenario, model.theoretical_flow(drive.w_max), dt, q_dc0)
+
+    resolved = None if bench_pump is None else bench_pump.resolved(nominal, spec)
+    log = McapLog(output, metadata=file_metadata(profile, spec, cfg, command, resolved, scenario), overwrite=overwrite)
+    for topic, msgtype in BENCH_TOPICS.items():
+        log.add_topic(topic, msgtype, qos="sensor")
+    show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
+    true = np.empty((5, n_ticks))           # delivered flow, speed, oil [°C], suction pressure, eccentricity
+    true_c = np.full(n_ticks, spec.clearance_factor)
+    t0_ns = spec.start_time_ns
+
+    def emit(topic: str, msg: dict, t_ns: int, write: bool = True) -> None:
+        lat = spec.latency_s + rng["latency"].exponential(spec.latency_jitter_s)
+        if write:
+            log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
+
+    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, drive.bath.start_c, state.theta, scenario)
+    try:
+        for k in range(n_ticks):
+            true_c[k], state = update_pump(model, cfg, spec, scenario, dt, profile.duration_s, k, state)
+            inp = drive(k)
+            state, out = model.advance(state, dt, inp)
+            drive.restriction.feed(out.port_mass_in / dt)
+            q_mean = tick_mean_flow(out)
+            true[:, k] = (q_mean, inp.omega, kelvin_to_celsius(inp.oil_temperature), inp.p_suction,
+                          math.hypot(*state.eccentricity))
+            t = (k + 1) * dt
+            sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), inp.p_delivery, inp.p_suction,
+                         float(out.delivery_flow[-1]), q_mean, true[2, k], state.theta)
+            show(t)
+    finally:
+        counts = log.message_counts
+        log.close()
+    show(profile.duration_s, done=True)
+    res = {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed, "message_counts": counts,
+           "truth": wear_truth(_truth(profile, cfg, model, true[0], true[1], true[2], dt), true_c, dt, spec)}
+    return res if not scenario else {**res, "fault_truth": fault_truth(scenario, cfg, dt, true[0], true[3], true[4])}
+
+
+class BenchDrive:
+    """What the bench feeds the emulated pump each tick: the drive's speed and the delivery valve's pressure
+    following the profile's set-points through first-order lags (``spec.motor_tau_s``, ``spec.valve_tau_s``),
+    the suction pressure (the suction line's drop ∝ speed², ``spec.suction_drop_pa`` at ``range.max_speed_rpm``,
+    less a suction restriction fault's, :attr:`restriction`) and the oil bath's temperature (:func:`oil_bath`).
+
+    Parameters
+    ----------
+    profile : Profile
+        Set-points.
+    spec : BenchSpec
+        Emulator settings.
+    cfg : PumpConfig
+        The emulated pump (atmospheric pressure [Pa], range).
+    dt : float
+        Tick [s].
+    n_ticks : int
+        Ticks of the run.
+    """
+
+    def __init__(self, profile: Profile, spec: BenchSpec, cfg: PumpConfig, dt: float, n_ticks: int):
+        self.sp_w, self.sp_p = profile.setpoints(np.arange(n_ticks + 1) * dt)
+        self.spec, self.dt, self.p_atm = spec, dt, cfg.fluid.atmospheric_pa
+        self.w_max = rpm_to_rad_s(cfg.range.max_speed_rpm)
+        self.bath = oil_bath(profile, spec)
+        self.motor = FirstOrderLag(spec.motor_tau_s, dt, self.sp_w[0])
+        self.valve = FirstOrderLag(spec.valve_tau_s, dt, self.sp_p[0])
+        self.restriction: SuctionRestriction | None = None
+
+    def suction(self, w: float) -> float:
+        """Suction pressure at shaft speed ``w`` [rad/s] without a restriction fault [Pa absolute]."""
+        return self.p_atm - self.spec.suction_drop_pa * (w / self.w_max) ** 2
+
+    def oil_k(self, t: float) -> float:
+        """True oil temperature of the emulated pump at ``t`` [s] [K]."""
+        return celsius_to_kelvin(self.bath(t))
+
+    def start(self) -> Inputs:
+        """The inputs at the first set-point (the run-in's) [rad/s, Pa, Pa, K]."""
+        w0, p0 = self.sp_w[0], self.sp_p[0]
+        return Inputs(float(w0), self.suction(w0), self.p_atm + float(p0), self.oil_k(0.0))
+
+    def __call__(self, k: int) -> Inputs:
+        """The inputs over tick ``k`` (from 0) [rad/s, Pa, Pa, K]; the lags advance by one tick."""
+        w = max(0.0, self.motor(self.sp_w[k]))
+        pd = self.p_atm + self.valve(self.sp_p[k])
+        ps = self.suction(w) - self.restriction.drop(k * self.dt)
+        return Inputs(w, ps, pd, self.oil_k(k * self.dt))
+
+
+def checked_inputs(profile: Profile, spec: BenchSpec, config: PumpConfig | None, bench_pump: BenchPump | None,
+                   faults) -> tuple[PumpConfig, PumpConfig, FaultScenario]:
+    """Every input of :func:`synthesize` checked before any work: the nominal config, the emulated pump's
+    and the faults resolved for the profile's duration.
+
+    Raises
+    ------
+    InputError
+        The outer-gear model, a set-point outside the pump's range, a publish rate, the emulated pump, a
+        fault (its start after the end of the run, a severity the emulated pump cannot take).
     """
     if spec.bearing not in BEARING_MODELS:
         raise InputError("bearing", spec.bearing, " | ".join(BEARING_MODELS))
     nominal = config or load_config()
     profile.check_within(nominal.range)
     cfg = emulated_config(nominal, spec.clearance_factor, bench_pump)
-    model = PumpModel(cfg, spec.bearing)
-    dt = 1.0 / spec.internal_rate_hz
     for rate, name in ((spec.speed_rate_hz, "speed_rate_hz"), (spec.pressure_rate_hz, "pressure_rate_hz"),
                        (spec.flow_rate_hz, "flow_rate_hz"), (spec.temperature_rate_hz, "temperature_rate_hz")):
-        spec.decimation(rate, name)                     # a bad rate refused before any work
-    n_ticks = int(round(profile.duration_s * spec.internal_rate_hz))
-    t_grid = np.arange(n_ticks + 1) * dt
-    sp_w, sp_p = profile.setpoints(t_grid)
-    p_atm = cfg.fluid.atmospheric_pa
-    w_max = rpm_to_rad_s(cfg.range.max_speed_rpm)
-    rng = noise_streams(spec.seed, ("speed", "pressure", "suction", "flow", "temperature", "latency"))
+        spec.decimation(rate, name)
+    scenario = FaultScenario(faults, profile.duration_s)
+    wear_end = spec.wear_clearance_factor_end / spec.clearance_factor if spec.wear_clearance_factor_end else 1.0
+    scenario.check(cfg, wear_end)
+    return nominal, cfg, scenario
 
-    def suction(w: float) -> float:
-        return p_atm - spec.suction_drop_pa * (w / w_max) ** 2
 
-    # ---- run-in at the first set-point (not recorded)
-    bath = oil_bath(profile, spec)
-
-    def oil_k(t: float) -> float:         # true oil temperature of the emulated pump [K]
-        return celsius_to_kelvin(bath(t))
-
-    inp = Inputs(float(sp_w[0]), suction(sp_w[0]), p_atm + float(sp_p[0]), oil_k(0.0))
-    state = model.initial_state(inp, t=-spec.warmup_s)
-    state, out = model.advance(state, spec.warmup_s, inp)
-    q_dc0 = float(np.mean(out.delivery_flow[-max(1, len(out) // 4):]))
-    motor = FirstOrderLag(spec.motor_tau_s, dt, sp_w[0])
-    valve = FirstOrderLag(spec.valve_tau_s, dt, sp_p[0])
-
-    resolved = None if bench_pump is None else bench_pump.resolved(nominal, spec)
-    log = McapLog(output, metadata=file_metadata(profile, spec, cfg, command, resolved), overwrite=overwrite)
-    for topic, msgtype in BENCH_TOPICS.items():
-        log.add_topic(topic, msgtype, qos="sensor")
-    show = _progress_printer(progress, f"synth-bench {profile.name}", profile.duration_s)
-    true_q = np.empty(n_ticks)
-    true_w = np.empty(n_ticks)
-    true_t = np.empty(n_ticks)
-    true_c = np.full(n_ticks, spec.clearance_factor)
-    t0_ns = spec.start_time_ns
-
-    def emit(topic: str, msg: dict, t_ns: int) -> None:
-        lat = spec.latency_s + rng["latency"].exponential(spec.latency_jitter_s)
-        log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
-
-    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, bath.start_c, state.theta)
-    try:
-        for k in range(n_ticks):
-            true_c[k] = apply_wear(model, cfg, spec, dt, profile.duration_s, k)
-            w = max(0.0, motor(sp_w[k]))
-            pd = p_atm + valve(sp_p[k])
-            ps = suction(w)
-            t_oil = oil_k(k * dt)
-            state, out = model.advance(state, dt, Inputs(w, ps, pd, t_oil))
-            q_mean = tick_mean_flow(out)
-            true_q[k], true_w[k], true_t[k] = q_mean, w, kelvin_to_celsius(t_oil)
-            t = (k + 1) * dt
-            sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), pd, ps, float(out.delivery_flow[-1]), q_mean,
-                         true_t[k], state.theta)
-            show(t)
-    finally:
-        counts = log.message_counts
-        log.close()
-    show(profile.duration_s, done=True)
-    return {"profile": profile.name, "duration_s": profile.duration_s, "seed": spec.seed,
-            "message_counts": counts,
-            "truth": wear_truth(_truth(profile, cfg, model, true_q, true_w, true_t, dt), true_c, dt, spec)}
+def fault_truth(scenario: FaultScenario, cfg: PumpConfig, dt: float, q: np.ndarray, ps: np.ndarray,
+                ecc: np.ndarray) -> dict[str, list[float]]:
+    """The faults' truth every :data:`WEAR_UPDATE_TICKS` ticks of ``dt`` [s]: each fault's value (unit per kind,
+    :meth:`FaultScenario.series`) and, at the tick before, the emulated pump's delivered flow [m³/s], suction
+    pressure [Pa absolute] and outer-gear eccentricity [m], from the per-tick arrays ``q``, ``ps``, ``ecc``."""
+    out = scenario.series(WEAR_UPDATE_TICKS, dt, cfg.air.air_fraction)
+    idx = np.clip(np.asarray(out["tick"]) - 1, 0, len(q) - 1)
+    return {**out, "delivery_flow_m3s": q[idx].tolist(), "suction_pa": ps[idx].tolist(),
+            "eccentricity_m": ecc[idx].tolist()}
 
 
 #: The wear scenario updates the emulated clearances every this many ticks (0.1 s at 1 kHz).
@@ -352,9 +449,26 @@ def apply_wear(model: PumpModel, emulated: PumpConfig, spec: BenchSpec, dt: floa
         return spec.clearance_factor
     f = wear_factor(spec, (tick - tick % WEAR_UPDATE_TICKS) * dt, duration_s)
     if tick % WEAR_UPDATE_TICKS == 0:
-        from gerotor_twin.model.clearance_scale import scale_clearances
         scale_clearances(model, emulated, f / spec.clearance_factor)
     return f
+
+
+def update_pump(model: PumpModel, emulated: PumpConfig, spec: BenchSpec, faults: FaultScenario, dt: float,
+                duration_s: float, tick: int, state):
+    """The emulated pump at tick ``tick`` (of ``dt`` [s]): every :data:`WEAR_UPDATE_TICKS` ticks the worn
+    clearances of the wear scenario (:func:`apply_wear`) and of the pump faults (tip, lateral, housing wear, air
+    ingress: :meth:`FaultScenario.pump_config`); a changed state equation (air) converts ``state`` to the same
+    pressures.  Returns the wear scenario's clearance factor [-] and the state."""
+    if not faults.changes_pump:
+        return apply_wear(model, emulated, spec, dt, duration_s, tick), state
+    t = (tick - tick % WEAR_UPDATE_TICKS) * dt
+    f = wear_factor(spec, t, duration_s)
+    if tick % WEAR_UPDATE_TICKS == 0:
+        old = model.kernel.eos
+        take_config(model, faults.pump_config(emulated, t, f / spec.clearance_factor))
+        if "air_ingress" in faults.by_kind:
+            state = replace(state, log_density=convert_log_density(state.log_density, old, model.kernel.eos))
+    return f, state
 
 
 def wear_truth(rows: list[dict], factor: np.ndarray, dt: float, spec: BenchSpec) -> list[dict]:

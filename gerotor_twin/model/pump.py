@@ -138,12 +138,17 @@ class PumpModel:
 
     def rebuild_kernel(self, config: PumpConfig, tables: GeometryTables) -> None:
         """Take ``config``/``tables`` (e.g. scaled clearances): the kernel as built in ``__init__``
-        (micro-motion choices), at the oil temperature the model is at; the state stays valid."""
+        (micro-motion choices), at the oil temperature the model is at; the state stays valid (a changed
+        state equation, ``mixture``: convert it, :func:`~gerotor_twin.hydraulics.state_equation.convert_log_density`).
+        A changed housing clearance also rebuilds an external outer-gear model (short bearing, FDM)."""
         km = _with_micro_motion(kernel_model(config, tables, self.lateral), config, self.bearing_name)
         if config.oil is not None and self.temperature_k != config.reference_temperature_k:
             km = at_temperature(km, config, self.lateral, self.temperature_k)
+        housing_changed = config.clearances.housing_radial_m != self.config.clearances.housing_radial_m
         self.kernel = km
         self.config, self.geometry, self.tables = config, config.gears, tables
+        if housing_changed and self._move == K.MOVE_EXTERNAL:
+            self._make_bearing(km.pc.viscosity)
 
     @property
     def restriction_mode(self) -> bool:
