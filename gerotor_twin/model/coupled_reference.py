@@ -1,0 +1,172 @@
+r"""An independent reference for the outer gear on its teeth: pressures and gear position integrated together.
+
+The twin and its tight reference (:mod:`.accuracy`) share one scheme: the gear's position held over an output
+step, its velocity linearised in the load, the tooth contact as Moreau's time-stepping
+(:mod:`.tooth_constraint`).  A finer run of that scheme cannot tell whether the scheme is right.  This
+reference integrates the chamber log-densities y and the gear's position e as one ODE with an implicit
+Runge–Kutta method of order 5 (Radau IIA, scipy's ``Radau`` [2]) at tight tolerances:
+
+.. math::
+    \dot y = f(y, \theta, \mathbf e, \dot{\mathbf e}),\qquad
+    \dot{\mathbf e} = \mathbf M(\mathbf e, \mathbf F(y, \theta, \mathbf e))
+        + \sum_{k=1,2} \lambda_k\, G\,\mathbf n_k
+
+with the gaps and displaced volumes at the current e (no freezing), the full nonlinear mobility M of sec. 2.2
+of [1] (not linearised), and the contact of the two lobes with the smallest gaps as the complementarity problem
+of :func:`.tooth_constraint.reactions`, with the rate of each gap taken as
+
+.. math::
+    r_k = \frac{\partial g_k}{\partial\theta}\,\omega + \frac{g_k}{\tau}
+
+(the gap's own rate by the shaft's turn, plus a relaxation over τ that holds it at zero without penetration:
+a lobe that closes faster than g/τ is held, the sweeping process of [3] as τ → 0).  The right-hand side is
+continuous in the state, so the implicit method needs no event handling.  What it shares with the twin is the
+physics (flows, loads, mobility, gap tables), not the time discretisation or the contact scheme.
+
+References
+----------
+.. [1] The paper (``../shared/paper``).
+.. [2] E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996, sec. IV.8.
+.. [3] J.J. Moreau, "Numerical aspects of the sweeping process", Comput. Methods Appl. Mech. Engrg. 177 (1999)
+   329–349.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import njit
+from ..bearing.mobility import mobility_kernel
+from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
+from .contact import contact, gap_coefficients, gap_value
+from .flows import rhs
+from .gear_coupling import GC_ON, load_step
+from .kernel import to_pressures
+from .loads import outer_gear_load
+from .params import FL_DELIVERY, operating
+from .tooth_constraint import constrained_velocity, contact_pair, gap_normal, two_smallest
+
+__all__ = ["coupled_rhs", "coupled_revolution", "RELAXATION_DEG"]
+
+#: τ of the contact's relaxation as a shaft angle [deg] (τ = this / ω): far below the output step of 1.5°.
+RELAXATION_DEG = 0.005
+
+
+@njit
+def _gap_rate(tab, delta, theta, omega, ex, ey, k, c):
+    """∂g_k/∂θ·ω [m/s] of lobe k at (ex, ey) [m]: a central difference of the tables over ±1e-6 rad."""
+    d = 1e-6
+    gap_coefficients(tab, theta + d, k, c)
+    gp = gap_value(c, delta, ex, ey, 0.0)
+    gap_coefficients(tab, theta - d, k, c)
+    return (gp - gap_value(c, delta, ex, ey, 0.0)) / (2.0 * d) * omega
+
+
+@njit
+def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
+    """d/dt of z = (y [-], e [m]) [1/s, m/s] into ``out`` at t [s] (θ = θ₀ + ωt [rad]); τ: the relaxation [s].
+
+    ``z``: the N+1 log-densities (the last: ∫ delivered flow dt [m³] in imposed-pressure mode, as the
+    stepper) and (e_x, e_y).  Uses ``ws`` for scratch; ``ws.flows`` holds the flows at this state.
+    """
+    pc, tab = km.pc, km.tab
+    n = pc.n
+    n1 = n + 1
+    y = z[:n1]
+    ex, ey = z[n1], z[n1 + 1]
+    theta = theta0 + op.omega * t
+    _x, _y, _gam, kc = contact(tab, n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
+    to_pressures(y, km, ws.pres)
+    fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)    # Eqs. (24)-(27)
+    bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
+    omega2 = op.omega * (n - 1) / n
+    d = load_step(fx, fy)
+    vx, vy = mobility_kernel(ex, ey, fx, fy, omega2, bp)
+    v1x, v1y = mobility_kernel(ex, ey, fx + d, fy, omega2, bp)
+    v2x, v2y = mobility_kernel(ex, ey, fx, fy + d, omega2, bp)
+    k1, k2, g1, g2 = two_smallest(ws.cmat, pc.tip_clearance, ex, ey)
+    c = np.empty(10)                                  # an offline reference: it may allocate
+    r1 = _gap_rate(tab, pc.tip_clearance, theta, op.omega, ex, ey, k1, c)
+    r2 = _gap_rate(tab, pc.tip_clearance, theta, op.omega, ex, ey, k2, c)
+    n1x, n1y = gap_normal(ws.cmat[k1], ex, ey)
+    n2x, n2y = gap_normal(ws.cmat[k2], ex, ey)
+    contact_pair((v1x - vx) / d, (v2x - vx) / d, (v1y - vy) / d, (v2y - vy) / d, n1x, n1y, n2x, n2y,
+                 r1 + g1 / tau, r2 + g2 / tau, c)
+    vx, vy, _l1, _l2 = constrained_velocity(vx, vy, c)
+    ws.disp[0], ws.disp[1], ws.disp[2], ws.disp[3] = ex, ey, vx, vy      # volumes at e, squeezed by ė (volumes.py)
+    ws.gear[GC_ON] = 0.0
+    rhs(y, theta, ws.gaps0, km, op, ws, ws.f0, ws.jac, False)
+    for i in range(n1):
+        out[i] = ws.f0[i]
+    out[n1] = vx
+    out[n1 + 1] = vy
+
+
+def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 2, rtol: float = 1e-7,
+                       samples_per_step: int = 8):
+    """One revolution of the coupled reference at (rpm, bar gauge), after ``revolutions − 1`` settling ones.
+
+    Parameters
+    ----------
+    model : PumpModel
+        The pump (mobility method; its numerics are not used).
+    state : PumpState
+        Start (e.g. the twin's periodic state at the point): its angle, log-densities and eccentricity.
+    rtol : float
+        Radau's relative tolerance [-]; absolute: 1e-9 on ln ρ, 1e-11 m on e, 1e-12 m³ on the delivered volume.
+    samples_per_step : int
+        Dense-output samples per twin output step, for the peak between samples.
+
+    Returns
+    -------
+    (Revolution, ndarray)
+        The recorded revolution at the twin's output angles (:class:`.accuracy.Revolution`), and e [m] there.
+    """
+    from scipy.integrate import solve_ivp
+
+    from .accuracy import Revolution
+    from .volumetric import EdgeLosses
+    cfg, km, n = model.config, model.kernel, model.N
+    omega = rpm_to_rad_s(rpm)
+    p_d = bar_gauge_to_pa_abs(bar, cfg.fluid.atmospheric_pa)
+    op = operating(km, omega, cfg.boundary.suction_pressure_pa, p_d)
+    if model.restriction_mode:
+        raise ValueError("coupled_revolution: imposed delivery pressure only (boundary.mode: imposed)")
+    ws = model._ws
+    period = 2.0 * math.pi / omega
+    tau = math.radians(RELAXATION_DEG) / omega
+    z = np.concatenate([state.log_density, state.eccentricity]).astype(float)
+    z[n] = 0.0
+    out = np.empty(n + 3)
+
+    def f(t, zz):
+        coupled_rhs(t, zz, state.theta, tau, km, op, ws, out)
+        return out.copy()
+    atol = np.full(n + 3, 1e-9)
+    atol[n] = 1e-12
+    atol[n + 1:] = 1e-11
+    for _ in range(revolutions - 1):
+        z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
+        z[n] = 0.0
+    m = max(1, int(math.ceil(period / model.step_size(omega) - 1e-9)))     # the twin's output steps (advance)
+    t_fine = np.linspace(0.0, period, m * samples_per_step + 1)
+    sol = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
+    fine = sol.sol(t_fine)
+    pres = np.empty(n + 1)
+    p_fine = np.empty((t_fine.size, n))
+    q_fine = np.empty(t_fine.size)
+    for i in range(t_fine.size):
+        f(t_fine[i], fine[:, i])
+        to_pressures(fine[:n + 1, i], km, pres)
+        p_fine[i] = pres[:n]
+        q_fine[i] = ws.flows[FL_DELIVERY]
+    pick = slice(samples_per_step, None, samples_per_step)          # the twin's output angles (after each step)
+    qth = model.theoretical_flow(omega)
+    eta = float(sol.y[n, -1] / (qth * period))
+    edge = EdgeLosses.of(cfg, model.displacement)
+    q = eta * qth - edge.flow(omega, p_d, op.p_s)
+    rev = Revolution(theta=state.theta + omega * t_fine[pick], chamber_pressures=p_fine[pick],
+                     delivery_flow=q_fine[pick], volumetric_efficiency=q / qth, mean_delivery_flow=q,
+                     peak_pressure=float(p_fine.max()))
+    return rev, fine[n + 1:, pick].T
