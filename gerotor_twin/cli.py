@@ -229,7 +229,8 @@ def cmd_bench(args) -> int:
         prov = provenance(_bench_command(args))
         rows = print_accuracy(cfg, rpms=_floats(args.rpm or "3000", "--rpm"), bars=_floats(args.bar or "27.5", "--bar"),
                               models=tuple((args.models or "mobility").split(",")),
-                              check_reference=args.check_reference, cache=_reference_cache(args))
+                              check_reference=args.check_reference, cache=_reference_cache(args),
+                              coupled=args.coupled_reference)
         if args.json:
             _write_json(args.json, rows[0] if len(rows) == 1 else {"points": rows})
         if args.markdown or args.write_doc:
@@ -310,7 +311,8 @@ def _bench_family(args) -> int:
             from .model.accuracy import print_accuracy
             rpms, bars = family_grid(cfg)
             rows = print_accuracy(cfg, rpms=rpms, bars=bars, models=models, check_reference=args.check_reference,
-                                  label=f"{pump.name} ({pump.path})", cache=_reference_cache(args))
+                                  label=f"{pump.name} ({pump.path})", cache=_reference_cache(args),
+                                  coupled=args.coupled_reference)
             ok &= all(r["within_budget"] for r in rows)
             print(f"{pump.name}: {sum(r['within_budget'] for r in rows)} of {len(rows)} points within budget",
                   flush=True)
@@ -462,6 +464,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--check-reference", action="store_true",
                    help="accuracy: also show how far the reference moves against one with half its tolerance and "
                         "twice its output-step refinement (largest budget figure, as a fraction of its budget)")
+    b.add_argument("--coupled-reference", action="store_true",
+                   help="accuracy: also compare the mobility model with the independent reference that integrates "
+                        "the pressures and the gear position together (Radau; minutes per point, cached)")
     b.add_argument("--numerics", metavar="KEY=VALUE[,...]",
                    help="accuracy / realtime: override numerics fields of every pump (e.g. tolerance=0.02,"
                         "closing_tolerance=1), to compare step-control settings on the same references")

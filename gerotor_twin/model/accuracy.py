@@ -48,12 +48,13 @@ import time
 from dataclasses import dataclass
 import numpy as np
 
+from .coupled_reference import coupled_revolution
 from .pump import PumpModel
 from .steady import reference_config, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
-__all__ = ["accuracy", "compare", "Revolution", "reference_revolution", "print_accuracy", "within_budget",
-           "reference_numerics", "reference_check", "BUDGET"]
+__all__ = ["accuracy", "compare", "coupled_comparison", "Revolution", "reference_revolution", "print_accuracy",
+           "within_budget", "reference_numerics", "reference_check", "BUDGET"]
 
 #: The error budget of the default numerics, one for every pump: RMS chamber-pressure error ≤ 1 % of the
 #: reference waveform's range, |peak error| ≤ 2 % of the reference peak (gauge), |η error| ≤ 0.3 % relative,
@@ -201,7 +202,8 @@ def reference_revolution(cfg, rpm: float, bar: float, model: str = "mobility", c
 
 
 def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility",
-             reference: Revolution | None = None, rtf_revolutions: int = 20) -> dict:
+             reference: Revolution | None = None, rtf_revolutions: int = 20, coupled: bool = False,
+             cache=None) -> dict:
     """Compare the numerics of ``cfg`` with :func:`reference_numerics` at one operating point.
 
     Parameters
@@ -214,6 +216,10 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
         Outer-gear model.
     reference : Revolution, optional
         A precomputed reference revolution (same point), to compare several numerics cheaply.
+    coupled : bool
+        Also compare with the independent reference of :mod:`.coupled_reference` (mobility only; started from
+        the twin's periodic state; minutes per point), as ``row["coupled"]``; ``cache`` as for
+        :func:`reference_revolution`.
     """
     ref = reference if reference is not None else reference_revolution(cfg, rpm, bar, model)
     test_model = PumpModel(cfg, model)
@@ -224,8 +230,22 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
                                                                "log_density_tolerance", "closing_tolerance")}}
     row.update(compare(Revolution.of(res), ref, ps, bar_gauge_to_pa_abs(bar, cfg.fluid.atmospheric_pa),
                        cfg.fluid.atmospheric_pa))
+    if coupled:
+        row["coupled"] = coupled_comparison(cfg, rpm, bar, Revolution.of(res), res.state, cache)
     row["rtf"], row["substeps_per_revolution"] = _rtf(test_model, res.state, rpm, bar, rtf_revolutions)
     return row
+
+
+def coupled_comparison(cfg, rpm: float, bar: float, twin: Revolution, state, cache=None) -> dict:
+    """The budget figures of the twin's revolution against the coupled reference (:mod:`.coupled_reference`:
+    pressures and gear position integrated together by Radau), started from ``state`` [rpm, bar gauge]."""
+    from .reference_cache import cached_revolution, reference_key
+    key = reference_key(cfg, rpm, bar, "mobility-coupled") if cache is not None else ""
+    rev, _ = cached_revolution(cache, key, lambda: coupled_revolution(PumpModel(cfg, "mobility"), rpm, bar, state)[0],
+                               Revolution.load)
+    p_atm = cfg.fluid.atmospheric_pa
+    err = compare(twin, rev, cfg.boundary.suction_pressure_pa, bar_gauge_to_pa_abs(bar, p_atm), p_atm)
+    return {k: err[k] for k in BUDGET} | {"within_budget": within_budget(err)}
 
 
 def within_budget(row: dict) -> bool:
@@ -251,13 +271,15 @@ def reference_check(cfg, rpm: float, bar: float, model: str = "mobility",
 
 
 def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=print,
-                   check_reference: bool = False, label: str = "", cache=None) -> list[dict]:
+                   check_reference: bool = False, label: str = "", cache=None, coupled: bool = False) -> list[dict]:
     """Run :func:`accuracy` over a grid of points and print one line each, budget verdict included.
 
     ``check_reference``: also print, per point, how much the reference moves against a tighter one
     (:func:`reference_check`, the largest figure as a fraction of its budget; stored as
     ``reference_check`` in each row).  ``label``: a name printed on the header (a pump of the family).
     ``cache``: a directory of cached references (:mod:`.reference_cache`); None computes each one.
+    ``coupled``: also compare the mobility model with the coupled reference (:func:`coupled_comparison`), one
+    more line per point.
     """
     n = cfg.numerics
     out(f"{label + ': ' if label else ''}default numerics (output step {n.max_step_deg:g}° / "
@@ -276,7 +298,8 @@ def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=
         for rpm in rpms:
             for bar in bars:
                 ref = reference_revolution(cfg, rpm, bar, model, cache)
-                r = accuracy(cfg, rpm, bar, model, reference=ref)
+                r = accuracy(cfg, rpm, bar, model, reference=ref, coupled=coupled and model == "mobility",
+                             cache=cache)
                 r["within_budget"] = within_budget(r)
                 chk = ""
                 if check_reference:
@@ -289,4 +312,10 @@ def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=
                     f"{r['sampled_peak_error']:+8.2%} {r['peak_numerics_error']:+8.2%} {r['peak_sampling_error']:+8.2%} "
                     f"{r['efficiency_error']:+8.3%} {r['flow_rms_error']:8.2%} {r['substeps_per_revolution']:7.0f}"
                     f"{chk}  {'ok' if r['within_budget'] else 'OUTSIDE BUDGET'}")
+                if "coupled" in r:
+                    c = r["coupled"]
+                    out(f"    against the coupled reference (pressures and gear position together, Radau): RMS "
+                        f"{c['rms_pressure_error_of_range']:.2%}, peak {c['peak_pressure_error_gauge']:+.2%}, "
+                        f"η {c['efficiency_error']:+.3%}, flow RMS {c['flow_rms_error']:.2%}  "
+                        f"{'ok' if c['within_budget'] else 'OUTSIDE BUDGET'}")
     return rows
