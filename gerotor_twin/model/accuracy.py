@@ -241,8 +241,8 @@ def coupled_comparison(cfg, rpm: float, bar: float, twin: Revolution, state, cac
     pressures and gear position integrated together by Radau), started from ``state`` [rpm, bar gauge]."""
     from .reference_cache import cached_revolution, reference_key
     key = reference_key(cfg, rpm, bar, "mobility-coupled") if cache is not None else ""
-    rev, _ = cached_revolution(cache, key, lambda: coupled_revolution(PumpModel(cfg, "mobility"), rpm, bar, state)[0],
-                               Revolution.load)
+    rev, _ = cached_revolution(cache, key, lambda: Revolution(**coupled_revolution(PumpModel(cfg, "mobility"), rpm,
+                                                                                     bar, state)[0]), Revolution.load)
     p_atm = cfg.fluid.atmospheric_pa
     err = compare(twin, rev, cfg.boundary.suction_pressure_pa, bar_gauge_to_pa_abs(bar, p_atm), p_atm)
     return {k: err[k] for k in BUDGET} | {"within_budget": within_budget(err)}

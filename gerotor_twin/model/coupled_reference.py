@@ -120,12 +120,12 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
 
     Returns
     -------
-    (Revolution, ndarray)
-        The recorded revolution at the twin's output angles (:class:`.accuracy.Revolution`), and e [m] there.
+    (dict, ndarray)
+        The recorded revolution at the twin's output angles, as the fields of :class:`.accuracy.Revolution`
+        (θ [rad], chamber pressures [Pa], delivery flow [m³/s], η [-], mean flow [m³/s], peak [Pa]), and e [m] there.
     """
     from scipy.integrate import solve_ivp
 
-    from .accuracy import Revolution
     from .volumetric import EdgeLosses
     cfg, km, n = model.config, model.kernel, model.N
     omega = rpm_to_rad_s(rpm)
@@ -146,12 +146,14 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     atol = np.full(n + 3, 1e-9)
     atol[n] = 1e-12
     atol[n + 1:] = 1e-11
-    for _ in range(revolutions - 1):
-        z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
-        z[n] = 0.0
+    with np.errstate(over="ignore"):        # scipy's finite-difference Jacobian grows its increments past 1e308
+        for _ in range(revolutions - 1):
+            z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
+            z[n] = 0.0
     m = max(1, int(math.ceil(period / model.step_size(omega) - 1e-9)))     # the twin's output steps (advance)
     t_fine = np.linspace(0.0, period, m * samples_per_step + 1)
-    sol = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
+    with np.errstate(over="ignore"):
+        sol = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
     fine = sol.sol(t_fine)
     pres = np.empty(n + 1)
     p_fine = np.empty((t_fine.size, n))
@@ -166,7 +168,6 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     eta = float(sol.y[n, -1] / (qth * period))
     edge = EdgeLosses.of(cfg, model.displacement)
     q = eta * qth - edge.flow(omega, p_d, op.p_s)
-    rev = Revolution(theta=state.theta + omega * t_fine[pick], chamber_pressures=p_fine[pick],
-                     delivery_flow=q_fine[pick], volumetric_efficiency=q / qth, mean_delivery_flow=q,
-                     peak_pressure=float(p_fine.max()))
+    rev = dict(theta=state.theta + omega * t_fine[pick], chamber_pressures=p_fine[pick], delivery_flow=q_fine[pick],
+               volumetric_efficiency=q / qth, mean_delivery_flow=q, peak_pressure=float(p_fine.max()))
     return rev, fine[n + 1:, pick].T
