@@ -2,8 +2,8 @@
 with a suggestion, bad files one line, and no parameter changes at run time (each refusal has a reason).
 
 Tiers: behaviour.  The pure parts (gerotor_twin.ros.param_args, gerotor_twin.ros.params.check_overrides)
-are tested without ROS; the node ones in real processes (marked slow).
-"""
+are tested without ROS; the node's refusals through its ``main`` in this process (they come before
+``rclpy.init``) and, with the rest, in real processes (marked slow)."""
 import signal
 import subprocess
 import sys
@@ -174,7 +174,6 @@ def run_node(*ros_args, timeout=60):
     return p.returncode, out + err
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("args,needle", [
     (("--params-file", TWIN_YAML, "-p", "tick_rat_hz:=200.0"), "did you mean tick_rate_hz"),
     (("--params-file", TWIN_YAML, "-p", "tick_rate_hz:=abc"), "tick_rate_hz = 'abc'"),
@@ -306,7 +305,6 @@ def test_node_refuses_live_changes_with_reason(tmp_path):
         rclpy.try_shutdown(context=ctx)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("content,needle", [
     ("/**:\n  ros__parameters:\n    stale_timout_s: 0.5\n", "did you mean stale_timeout_s"),
     ("/**:\n  ros__parameters:\n    tick_rate_hz: [100\n", "valid YAML"),
