@@ -182,19 +182,28 @@ def test_run_bag_bad_health_setting(tmp_path, capsys, item):
     assert not out.exists()
 
 
-def test_report_shows_health_and_alarms(wear_run, tmp_path):
+def test_report_shows_health_and_alarms(wear_run, tmp_path, monkeypatch):
     """Behaviour: the report of the wear run has the two health plots; the efficiency plot carries the
     estimate with its ±2σ band and the WARN and ERROR intervals the monitor logged, in that order."""
     from gerotor_twin.offline.health_log import alarm_intervals, load_health
+    from gerotor_twin.report import build
     from gerotor_twin.report.acceptance import AcceptanceCriterion
-    from gerotor_twin.report.build import _load, build_report, make_context
+    from gerotor_twin.report.build import build_report, make_context
     from gerotor_twin.report.health_panels import ts_health_efficiency, ts_health_leakage
+    loaded = []                          # the recordings as the report read them (read once: the twin log is long)
+
+    def load(*args):
+        loaded.append(real_load(*args))
+        return loaded[-1]
+    real_load = build._load
+    monkeypatch.setattr(build, "_load", load)
     html = tmp_path / "wear.html"
     build_report(BAGS / "bench_wear.mcap", [wear_run], html)
     page = html.read_text()
     assert '<div class="ts-panel" id="ts-health-efficiency"></div>' in page
     assert '<div class="ts-panel" id="ts-health-leakage"></div>' in page
-    ctx = make_context(*_load(BAGS / "bench_wear.mcap", [wear_run], None), AcceptanceCriterion(), "wear")
+    assert len(loaded) == 1
+    ctx = make_context(*loaded[0], AcceptanceCriterion(), "wear")
     eff, leak = ts_health_efficiency(ctx), ts_health_leakage(ctx)
     assert [iv.label for iv in eff.intervals] == ["WARN", "ERROR"] == [iv.label for iv in leak.intervals]
     t, rows = load_health(wear_run)

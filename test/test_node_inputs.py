@@ -112,12 +112,14 @@ def test_second_publisher_warned_followed_not_and_logged(wall_node):
     b_sent = []
     try:
         b.wait_matched(kinds=("shaft_speed",), proc=proc)
-        t_end = time.monotonic() + 4.0
+        t_end = time.monotonic() + 10.0          # B publishes until the node has counted 100 of its samples
         while time.monotonic() < t_end:
             t = bench.now() - 2 * MS
             b.send("shaft_speed", 0.5 * W, t)
             b_sent.append(t)
             time.sleep(0.005)
+            if len(b_sent) % 50 == 0 and counter(peer, "shaft_speed.other_source_samples") > seen0 + 100:
+                break
         peer.wait_for(lambda: counter(peer, "shaft_speed.other_source_samples") > seen0 + 100, 10,
                       "other-source samples counted", proc)
         inp, node = latest_diag(peer, INPUTS), latest_diag(peer, NODE)

@@ -2,8 +2,8 @@
 with a suggestion, bad files one line, and no parameter changes at run time (each refusal has a reason).
 
 Tiers: behaviour.  The pure parts (gerotor_twin.ros.param_args, gerotor_twin.ros.params.check_overrides)
-are tested without ROS; the node ones in real processes (marked slow).
-"""
+are tested without ROS; the node's refusals through its ``main`` in this process (they come before
+``rclpy.init``) and, with the rest, in real processes (marked slow)."""
 import signal
 import subprocess
 import sys
@@ -144,6 +144,20 @@ def test_run_time_changes_refused_with_reason():
 
 
 # ------------------------------------------------------------------ real processes
+def node_main(monkeypatch, capsys, *ros_args):
+    """The node's ``main`` in this process for a command line it must refuse before ``rclpy.init`` (reaching
+    ``rclpy.init`` fails the test): (exit code, stdout + stderr)."""
+    rclpy = pytest.importorskip("rclpy")
+    from gerotor_twin.ros import node
+
+    def no_init(*_a, **_k):        # pytest.fail: a BaseException, which main's `except Exception` does not catch
+        pytest.fail("the parameters passed validation: rclpy.init reached")
+    monkeypatch.setattr(rclpy, "init", no_init)
+    code = node.main(["twin_node", "--ros-args", *ros_args])
+    cap = capsys.readouterr()
+    return code, cap.out + cap.err
+
+
 def run_node(*ros_args, timeout=60):
     env_args = [sys.executable, "-m", "gerotor_twin.ros.node", "--ros-args", *ros_args]
     import os
@@ -160,18 +174,32 @@ def run_node(*ros_args, timeout=60):
     return p.returncode, out + err
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("args,needle", [
     (("--params-file", TWIN_YAML, "-p", "tick_rat_hz:=200.0"), "did you mean tick_rate_hz"),
     (("--params-file", TWIN_YAML, "-p", "tick_rate_hz:=abc"), "tick_rate_hz = 'abc'"),
     (("--params-file", "/nonexistent/twin.yaml"), "file not found"),
     (("--params-file", str(ROOT / "config" / "pump.yaml")), "ros__parameters"),
 ])
-def test_node_refuses_bad_parameters_one_line(args, needle):
-    """Behaviour (real process): exit 2, one line naming the problem, no traceback."""
-    code, out = run_node(*args)
+def test_node_refuses_bad_parameters_one_line(args, needle, monkeypatch, capsys):
+    """Behaviour: exit 2, one line naming the problem, no traceback (the node's ``main``, which refuses these
+    before ``rclpy.init``; the real process: ``test_node_refuses_bad_parameters_from_the_shell``)."""
+    code, out = node_main(monkeypatch, capsys, *args)
     lines = [ln for ln in out.splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and needle in lines[0] and "Traceback" not in out, out
+
+
+@pytest.mark.slow
+def test_node_refuses_bad_parameters_from_the_shell(tmp_path):
+    """Behaviour (real process): a bad ``-p`` value and a typo in a params file: exit 2, one line naming the
+    problem, no traceback."""
+    code, out = run_node("--params-file", TWIN_YAML, "-p", "tick_rate_hz:=abc")
+    lines = [ln for ln in out.splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and "tick_rate_hz = 'abc'" in lines[0] and "Traceback" not in out, out
+    f = tmp_path / "twin.yaml"
+    f.write_text("/**:\n  ros__parameters:\n    stale_timout_s: 0.5\n")
+    code, out = run_node("--params-file", str(f))
+    lines = [ln for ln in out.splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and "did you mean stale_timeout_s" in lines[0] and str(f) in lines[0], out
 
 
 @pytest.mark.slow
@@ -277,17 +305,17 @@ def test_node_refuses_live_changes_with_reason(tmp_path):
         rclpy.try_shutdown(context=ctx)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("content,needle", [
     ("/**:\n  ros__parameters:\n    stale_timout_s: 0.5\n", "did you mean stale_timeout_s"),
     ("/**:\n  ros__parameters:\n    tick_rate_hz: [100\n", "valid YAML"),
     ("/**:\n  ros__parameters:\n    bearing_model: fdm\n    log_queue: 1.5\n", "log_queue = 1.5"),
 ])
-def test_node_refuses_bad_params_file_one_line(tmp_path, content, needle):
-    """Behaviour (real process): a typo or a malformed params file: exit 2, one line, no traceback."""
+def test_node_refuses_bad_params_file_one_line(tmp_path, content, needle, monkeypatch, capsys):
+    """Behaviour: a typo or a malformed params file: exit 2, one line, no traceback (the node's ``main``; the
+    real process: ``test_node_refuses_bad_parameters_from_the_shell``)."""
     f = tmp_path / "twin.yaml"
     f.write_text(content)
-    code, out = run_node("--params-file", str(f))
+    code, out = node_main(monkeypatch, capsys, "--params-file", str(f))
     lines = [ln for ln in out.splitlines() if ln.strip()]
     assert code == 2 and len(lines) == 1 and needle in lines[0] and str(f) in lines[0], out
 

@@ -84,10 +84,18 @@ def test_default_directory_follows_the_environment(monkeypatch, tmp_path):
 
 @pytest.mark.parametrize("text, word", [("nosuchkey=1", "nosuchkey"), ("tolerance=abc", "tolerance"),
                                         ("tolerance=-1", "tolerance")])
-def test_bench_numerics_override_refuses_a_bad_field_naming_it(text, word):
+def test_bench_numerics_override_refuses_a_bad_field_naming_it(text, word, capsys):
     """Behaviour: ``bench --numerics`` with an unknown key, a value of the wrong type or out of range is
-    one error line naming it (exit 2), before anything runs."""
-    r = subprocess.run([sys.executable, "-m", "gerotor_twin.cli", "bench", "accuracy", "--numerics", text],
+    one error line naming it (exit 2), before anything runs (the command's ``main``; the process: next test)."""
+    from gerotor_twin.cli import main
+    assert main(["bench", "accuracy", "--numerics", text]) == 2
+    err = capsys.readouterr().err
+    assert word in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_bench_numerics_override_refused_from_the_shell():
+    """Behaviour: the same in a fresh ``python -m gerotor_twin.cli`` process: exit status 2, the field named."""
+    r = subprocess.run([sys.executable, "-m", "gerotor_twin.cli", "bench", "accuracy", "--numerics", "nosuchkey=1"],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
-    assert word in r.stderr and "Traceback" not in r.stderr
+    assert "nosuchkey" in r.stderr and "Traceback" not in r.stderr

@@ -36,9 +36,13 @@ for t, ty in (("/bench/shaft_speed", JointState), ("/bench/delivery_pressure", F
     node.create_subscription(ty, t, raw_cb(t), qos, raw=True)
 node.create_subscription(Clock, "/clock", lambda msg: got["/clock"].append(msg.clock.sec * 10**9 + msg.clock.nanosec), qos)
 ex = SingleThreadedExecutor(); ex.add_node(node)
+t_end = [time.monotonic() + seconds]
+def _finished():             # a line on stdin: the replay has exited; take what is still in flight, then stop
+    sys.stdin.readline()
+    t_end[0] = min(t_end[0], time.monotonic() + 1.0)
+threading.Thread(target=_finished, daemon=True).start()
 print("ready", flush=True)
-t_end = time.monotonic() + seconds
-while time.monotonic() < t_end:
+while time.monotonic() < t_end[0]:
     ex.spin_once(timeout_sec=0.05)
 json.dump(got, open(out, "w"))
 node.destroy_node(); rclpy.shutdown()
@@ -78,7 +82,7 @@ def test_load_messages_and_bad_topics(bag):
 def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
     out = tmp_path / "got.json"
     dom = claim_domain()
-    sub = _start([sys.executable, "-c", SUBSCRIBER, str(out), "12"], dom)
+    sub = _start([sys.executable, "-c", SUBSCRIBER, str(out), "12"], dom, stdin=subprocess.PIPE)
     rep = None
     try:
         assert sub.stdout.readline().strip() == "ready"
@@ -87,7 +91,7 @@ def test_subscriber_gets_the_recorded_bytes_and_clock(bag, tmp_path):
         _, err = rep.communicate(timeout=60)
         assert rep.returncode == 0, err
         assert "finished: 300 messages" in err
-        sub.communicate(timeout=30)
+        sub.communicate("replay exited\n", timeout=30)     # the subscriber listens 1 s more (12 s at most)
     finally:
         _stop(sub)
         if rep is not None:

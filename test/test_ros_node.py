@@ -132,10 +132,12 @@ def test_sim_time_coarse_clock_same_mean_flow(tmp_path, reference_flow):
     try:
         peer.wait_matched(proc=proc)
 
-        def phase(clock_hz, seconds):
+        def phase(clock_hz, seconds, enough=None):
+            """Clock and inputs for ``seconds``, or until ``enough`` revolution summaries came (after 1 s)."""
             peer.clear()
             step = int(1e9 / clock_hz)
-            t_end = time.monotonic() + seconds
+            t0 = time.monotonic()
+            t_end = t0 + seconds
             next_input = 0
             while time.monotonic() < t_end:
                 sim[0] += step
@@ -145,11 +147,13 @@ def test_sim_time_coarse_clock_same_mean_flow(tmp_path, reference_flow):
                     peer.send("delivery_pressure", PD, sim[0])
                     next_input = sim[0] + 5 * MS
                 time.sleep(step / 1e9)
+                if enough and time.monotonic() - t0 > 1.0 and len(peer.get("twin/flow_summary")) >= enough:
+                    break
             return np.array([msg.data for msg in peer.get("twin/flow_summary")])
 
         phase(200, 1.5)                                       # start-up transient
-        coarse = phase(40, 3.0)
-        fine = phase(1000, 2.0)
+        coarse = phase(40, 3.0, enough=24)
+        fine = phase(1000, 2.0, enough=24)
         assert stop_node(proc, signal.SIGINT) == 0
     finally:
         kill_node(proc)

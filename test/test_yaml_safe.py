@@ -85,30 +85,55 @@ def run_cli(*args):
                           cwd=ROOT, timeout=300)
 
 
-@pytest.mark.parametrize("args", [("geometry",), ("simulate", "--rpm", "1000", "--bar", "5"),
-                                  ("demo", "--out", "{tmp}/d"), ("bench", "realtime"), ("synth-bench", "-o", "{tmp}/s.mcap"),
-                                  ("run-bag", "bags/bench_map.mcap", "-o", "{tmp}/r.mcap"),
-                                  ("paper", "efficiency")])
-@pytest.mark.parametrize("bad", ["dir", "bomb", "unreadable"])
-def test_every_command_config_problem_is_one_line(tmp_path, args, bad):
-    """Behaviour: --config as a directory, an alias bomb or an unreadable file: one line, exit 2."""
+COMMANDS = [("geometry",), ("simulate", "--rpm", "1000", "--bar", "5"), ("demo", "--out", "{tmp}/d"),
+            ("bench", "realtime"), ("synth-bench", "-o", "{tmp}/s.mcap"),
+            ("run-bag", "bags/bench_map.mcap", "-o", "{tmp}/r.mcap"), ("paper", "efficiency")]
+BAD_CONFIGS = ["dir", "bomb", "unreadable"]
+
+
+def _bad_config(tmp_path, bad):
+    """--config as a directory, an alias bomb or an unreadable file (a Unix socket: ENXIO even for root)."""
     if bad == "dir":
-        cfg = tmp_path
+        return tmp_path
+    cfg = tmp_path / "pump.yaml"
+    if bad == "bomb":
+        cfg.write_text(laughs())
     else:
-        cfg = tmp_path / "pump.yaml"
-        if bad == "bomb":
-            cfg.write_text(laughs())
-        else:                                   # a Unix socket: unreadable even for root (ENXIO)
-            import socket
-            sock = socket.socket(socket.AF_UNIX)
-            sock.bind(str(cfg))
-            sock.close()
+        import socket
+        sock = socket.socket(socket.AF_UNIX)
+        sock.bind(str(cfg))
+        sock.close()
+    return cfg
+
+
+def _assert_one_config_line(stderr):
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: --config") and "Traceback" not in stderr, stderr
+    assert len(lines[0]) < MAX_ERROR_CHARS
+
+
+@pytest.mark.parametrize("args", COMMANDS)
+@pytest.mark.parametrize("bad", BAD_CONFIGS)
+def test_every_command_config_problem_is_one_line(tmp_path, args, bad, capsys, monkeypatch):
+    """Behaviour: --config as a directory, an alias bomb or an unreadable file: one line, exit 2 (the
+    command's ``main``, every command × every problem; the process around it: the next test)."""
+    from gerotor_twin.cli import main
+    monkeypatch.chdir(ROOT)
+    cfg = _bad_config(tmp_path, bad)
     argv = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    assert main([*argv, "--config", str(cfg)]) == 2
+    _assert_one_config_line(capsys.readouterr().err)
+
+
+@pytest.mark.parametrize("i", range(len(COMMANDS)))
+def test_every_command_config_problem_is_one_line_from_the_shell(tmp_path, i):
+    """Behaviour: the same in a fresh ``python -m gerotor_twin`` process (exit status 2, stderr one line and
+    nothing else, e.g. no warning at import): each command once, the three problems in turn."""
+    cfg = _bad_config(tmp_path, BAD_CONFIGS[i % len(BAD_CONFIGS)])
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in COMMANDS[i]]
     p = run_cli(*argv, "--config", str(cfg))
     assert p.returncode == 2, p.stderr
-    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("error: --config") and "Traceback" not in p.stderr, p.stderr
-    assert len(lines[0]) < MAX_ERROR_CHARS
+    _assert_one_config_line(p.stderr)
 
 
 def test_one_loader_everywhere():

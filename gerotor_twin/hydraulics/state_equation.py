@@ -41,6 +41,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -215,7 +216,8 @@ def state_equation(fluid: Fluid, model: str = "paper", air: AirContent | None = 
         Free air content and polytropic index of the mixture (default
         :class:`~gerotor_twin.hydraulics.mixture.AirContent`).
 
-    Cost: ≈ 3 ms (paper: the band table), ≈ 5–10 ms (mixture: one Newton solve per table node).
+    Cost: ≈ 3 ms (paper: the band table), ≈ 5–10 ms (mixture: one Newton solve per table node; the last 64
+    mixture tables are kept).
     """
     if model not in FLUID_MODELS:
         from ..errors import InputError
@@ -239,23 +241,30 @@ def state_equation(fluid: Fluid, model: str = "paper", air: AirContent | None = 
 
 
 def _mixture_equation(fluid: Fluid, air: AirContent) -> StateEquation:
-    """:class:`StateEquation` of the oil–air–vapour mixture (Hermite table of p(s) over the pump's range)."""
-    args = (fluid.bulk_modulus_pa, air.air_fraction, air.polytropic_index, fluid.vapour_pressure_pa,
-            fluid.atmospheric_pa)
+    """:class:`StateEquation` of the oil–air–vapour mixture (Hermite table of p(s) over the pump's range).
+
+    The table depends on five numbers only; the last 64 are kept (a calibration or a run-steady sweep builds
+    models at the same oil temperatures over and over; the arrays are shared and never written)."""
+    return _mixture_equation_of(float(fluid.bulk_modulus_pa), float(air.air_fraction), float(air.polytropic_index),
+                                float(fluid.vapour_pressure_pa), float(fluid.atmospheric_pa))
+
+
+@functools.lru_cache(maxsize=64)
+def _mixture_equation_of(beta_l: float, alpha0: float, n: float, p_vap: float, p_atm: float) -> StateEquation:
+    args = (beta_l, alpha0, n, p_vap, p_atm)
     s_hi = mixture_log_density(MIXTURE_TABLE_HI_PA, *args)
-    ds = (s_hi - mixture_log_density(max(MIXTURE_TABLE_LO_PA, fluid.vapour_pressure_pa + 1.0), *args)) / (
+    ds = (s_hi - mixture_log_density(max(MIXTURE_TABLE_LO_PA, p_vap + 1.0), *args)) / (
         MIXTURE_NODES - 1)
-    s_floor = mixture_log_density(fluid.vapour_pressure_pa + MIXTURE_CAVITATION_MARGIN_PA, *args)
+    s_floor = mixture_log_density(p_vap + MIXTURE_CAVITATION_MARGIN_PA, *args)
     nodes = int(min(MIXTURE_MAX_NODES, max(MIXTURE_NODES, math.ceil((s_hi - s_floor) / ds) + 1)))
     s_lo = s_hi - (nodes - 1) * ds
     p_tab, dp_tab = mixture_table(np.linspace(s_lo, s_hi, nodes), *args)
     # cavitating: gas + vapour above CAVITATION_GAS_SHARE of the volume, α₀(p₀ − p_v)/(p − p_v) ≈ share
-    p0, pv = fluid.atmospheric_pa, fluid.vapour_pressure_pa
-    p_cav = min(p0, pv + air.air_fraction * (p0 - pv) / CAVITATION_GAS_SHARE)
-    return StateEquation(beta_liquid=fluid.bulk_modulus_pa, ratio=1.0, p_atm=p0, band=0.0, p_vap=pv,
+    p0, pv = p_atm, p_vap
+    p_cav = min(p0, pv + alpha0 * (p0 - pv) / CAVITATION_GAS_SHARE)
+    return StateEquation(beta_liquid=beta_l, ratio=1.0, p_atm=p0, band=0.0, p_vap=pv,
                          p_lo=p_cav, p_hi=MIXTURE_TABLE_HI_PA, s_lo=s_lo, s_hi=s_hi, band_p=p_tab,
-                         band_dp=dp_tab, kind=MIXTURE, air_fraction=air.air_fraction,
-                         polytropic_index=air.polytropic_index)
+                         band_dp=dp_tab, kind=MIXTURE, air_fraction=alpha0, polytropic_index=n)
 
 
 def with_liquid_modulus(eos: StateEquation, fluid: Fluid, model: str, air: AirContent | None) -> StateEquation:
@@ -264,7 +273,8 @@ def with_liquid_modulus(eos: StateEquation, fluid: Fluid, model: str, air: AirCo
     Eq. (23) (``paper``): every β of the law is β* times a function of p alone, so
     s(p) ∝ 1/β* and the band table carries over exactly, rescaled (p nodes kept,
     slopes × k, s bounds / k, k = β*_new/β*_old): ≈ 10 µs instead of the ≈ 3–25 ms
-    of the bisection.  The mixture's table depends on β_L nonlinearly: rebuilt (≈ 2 ms).
+    of the bisection.  The mixture's table depends on β_L nonlinearly: rebuilt (≈ 2 ms), unless it is
+    one of the last 64 built.
     """
     same = (fluid.cavitation_ratio, fluid.atmospheric_pa, fluid.switch_band_pa, fluid.vapour_pressure_pa) == \
         (eos.ratio, eos.p_atm, eos.band, eos.p_vap)
