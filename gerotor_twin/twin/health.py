@@ -53,6 +53,7 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
+from gerotor_twin.twin.diagnosis import Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
@@ -89,7 +90,8 @@ def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
                  "reference_efficiency_sd", "calibrated_reference_efficiency", "residual_m3s",
-                 "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level")
+                 "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level", "fault",
+                 "fault_confidence")
 NS = 1_000_000_000
 
 
@@ -192,6 +194,17 @@ class _Window:
     q_pred: float = 0.0
     q_th: float = 0.0
     loss: float = 0.0
+    ticks: int = 0
+    op: tuple = (0.0, 0.0, 0.0, 0.0)     #: sums of omega, p_delivery, p_suction, oil temperature (K) over ticks
+    oil_ticks: int = 0
+
+    def add_inputs(self, inputs) -> None:
+        """Accumulate the tick's operating point (the model's held inputs)."""
+        t_oil = getattr(inputs, "oil_temperature", None)
+        self.ticks += 1
+        self.oil_ticks += t_oil is not None
+        self.op = tuple(a + b for a, b in zip(self.op, (inputs.omega, inputs.p_delivery, inputs.p_suction,
+                                                          0.0 if t_oil is None else t_oil)))
 
 
 class HealthMonitor:
@@ -217,15 +230,25 @@ class HealthMonitor:
         self._out_of_band = 0
         self.last_residual = math.nan
         self.history: list[dict] = []
+        self.windows: list[WindowRecord] = []
+        self.signatures: list[dict] = []
+        self.diagnosis: Diagnosis | None = None
+        self._signature_of = None
+        self._speed = SpeedCounter()
 
     # ------------------------------------------------------------- inputs
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
         """A measured delivery flow sample [m³/s] (accepted by the input book)."""
         self._flow.add(value_m3s, receive_ns)
 
+    def add_speed(self, receive_ns: int) -> None:
+        """A shaft-speed sample was accepted at ``receive_ns`` [ns] (input accounting for the diagnosis)."""
+        self._speed.add(receive_ns)
+
     def clock_jumped_back(self, now_ns: int) -> None:
         """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
         self._flow.forget_after(now_ns)
+        self._speed.forget_after(now_ns)
 
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
@@ -236,6 +259,8 @@ class HealthMonitor:
         if w is None:
             self._win = _Window(now_ns)
             return []
+        if inputs is not None:
+            w.add_inputs(inputs)
         for msg in messages:
             if msg.topic == FLOW_SUMMARY and msg.stamp_ns >= w.start_ns:
                 q, qth, loss, _eta = msg.msg["data"][:4]
@@ -275,6 +300,7 @@ class HealthMonitor:
         est = lf.predict(self.est, end_ns / NS, s.drift_per_sqrt_s)
         self.est = lf.update(est, q_th - q_meas, loss / self.k_applied, max(r, 1e-18))
         self.last_residual = q_meas - q_pred
+        self._diagnose(w, end_ns, q_meas, q_pred, q_th, math.sqrt(max(r, 1e-18)))
         self._res.append(self.last_residual)
         self._out_of_band = self._out_of_band + 1 if abs(self.est.innovation) > s.residual_band else 0
         if s.adapt and self.est.updates >= s.min_updates and abs(self.est.k / self.k_applied - 1) > 0.01:
@@ -284,6 +310,25 @@ class HealthMonitor:
         return [OutputMessage(HEALTH_TOPIC, m.FLOAT64_MULTIARRAY, end_ns,
                               m.float64_multiarray(values, (",".join(HEALTH_FIELDS),))),
                 named_values(HEALTH_UPDATE, end_ns, HEALTH_FIELDS, values)]
+
+    def _diagnose(self, w: _Window, end_ns: int, q_meas: float, q_pred: float, q_th: float, sd: float) -> None:
+        """Record the window (:class:`~.diagnosis.WindowRecord`) and classify the recent ones (not with adapt:
+        the residuals are then against a moving model)."""
+        got, expected = self._speed.count(w.start_ns, end_ns)
+        n = max(w.ticks, 1)
+        rec = WindowRecord(end_ns / NS, w.op[0] / n, w.op[1] / n, w.op[2] / n,
+                           w.op[3] / w.oil_ticks if w.oil_ticks else None, q_meas, q_pred, q_th, sd, got, expected)
+        if self.settings.adapt or w.ticks == 0:
+            return
+        if self._signature_of is None:
+            s = self.settings
+            self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
+                                                  reference=(s.reference_rpm, s.reference_bar))
+        self.windows.append(rec)
+        self.signatures.append(self._signature_of(rec))
+        keep = self._signature_of.settings.horizon
+        del self.windows[:-keep], self.signatures[:-keep]
+        self.diagnosis = classify(self.windows, self.signatures, self._signature_of.settings)
 
     def _adapt(self, k: float) -> None:
         from gerotor_twin.model.clearance_scale import scale_clearances
@@ -317,7 +362,13 @@ class HealthMonitor:
         rms = math.sqrt(sum(v * v for v in res) / len(res)) if res else math.nan
         return [e.k, e.sd, max(e.k, 0.0) ** (1 / self.exponent), self.reference_efficiency(e.k), e.sd * self.loss_ref / self.qth_ref,
                 self.reference_efficiency(1.0), self.last_residual, mean, rms, e.innovation, float(e.updates),
-                float(self.level())]
+                float(self.level()), *self.fault_values()]
+
+    def fault_values(self) -> tuple[float, float]:
+        """The diagnosis as published: code of the named kind (index in :data:`~.diagnosis.KINDS`, −1: not
+        classified) and its probability [-]."""
+        d = self.diagnosis
+        return (-1.0, math.nan) if d is None else (float(d.code), d.confidence)
 
     def status(self) -> dict:
         """``diagnostic_msgs/DiagnosticStatus`` dict ``gerotor_twin: health``."""
