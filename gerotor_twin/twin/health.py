@@ -53,12 +53,12 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.diagnosis import Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
+from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
-           "LEVELS", "alarm_intervals"]
+           "LEVELS", "alarm_intervals", "alarm_records", "fault_name"]
 
 #: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
@@ -86,6 +86,25 @@ def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
     if prev is not None and prev[0] in ("WARN", "ERROR"):
         closed.append(prev)
     return closed
+
+def alarm_records(t, rows: list[dict]) -> list[dict]:
+    """The alarm intervals of :func:`alarm_intervals` as ``{"start_s", "end_s", "level", "fault", "confidence"}``:
+    the fault the classifier named at the interval's last update (:data:`~.diagnosis.KINDS`; None when the
+    log carries no diagnosis or it was not classified) and its probability [-] (None alike)."""
+    out = []
+    for name, a, b in alarm_intervals(t, rows):
+        r = rows[next(i for i, ti in enumerate(t) if float(ti) == b)]
+        fault, conf = fault_name(r), float(r.get("fault_confidence", math.nan))
+        out.append({"start_s": a, "end_s": b, "level": name, "fault": None if fault == "-" else fault,
+                    "confidence": conf if fault != "-" and math.isfinite(conf) else None})
+    return out
+
+
+def fault_name(row: dict) -> str:
+    """The fault named in one health update (:data:`~.diagnosis.KINDS`; ``-`` when none was)."""
+    code = float(row.get("fault", -1.0))
+    return KINDS[int(code)] if math.isfinite(code) and 0 <= int(code) < len(KINDS) else "-"
+
 
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
@@ -384,8 +403,13 @@ class HealthMonitor:
                     f"({self.drop_pt():+.2f} pt below calibrated; WARN > {s.warn_pt:g}, ERROR > {s.error_pt:g})")
             if self._out_of_band >= s.band_updates:
                 text += f"; residual outside ±{s.residual_band:g} σ for {self._out_of_band} intervals"
+            if self.diagnosis is not None:
+                d = self.diagnosis
+                text += f"; fault: {d.kind} (probability {d.confidence:.2f} over {d.windows} intervals)"
         vals = {k: f"{x:.6g}" for k, x in v.items()}
         vals.update({"adapt": str(s.adapt).lower(), "reference_rpm": f"{s.reference_rpm:g}",
                      "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
                      "drop_pt": f"{self.drop_pt():.3f}", "model_eta_sd_from_calibration": f"{self.eta_rmse_cal:.4g}"})
+        if self.diagnosis is not None:
+            vals.update({"fault": self.diagnosis.kind, "speed_samples_missing": f"{self.diagnosis.dropout:.4f}"})
         return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)
