@@ -82,23 +82,31 @@ def plant():
     return cfg, SteadySignatures(cfg)
 
 
-def _flow(cfg, rpm, bar, **fault):
+def _flow(cfg, rpm, bar, p_suction=P_ATM, **fault):
     off = fault.pop("offset_pa", 0.0)
     model = PumpModel(scaled_config(cfg, **fault) if fault else cfg)
-    return run_steady(model, rpm, bar - off / 1e5, oil_temperature=OIL_K)
+    return run_steady(model, rpm, bar - off / 1e5, p_suction=p_suction, oil_temperature=OIL_K)
 
 
-def _records(cfg, fault: dict, gain: float = 0.0, seed: int = 0, windows: int = 3):
-    """Window records of the pump with ``fault`` (scaled_config keywords, or offset_pa) and a meter gain."""
+def _records(cfg, fault: dict, gain: float = 0.0, seed: int = 0, windows: int = 3, restriction_pa: float | None = None):
+    """Window records of the pump with ``fault`` (scaled_config keywords, or offset_pa) and a meter gain.
+
+    With ``restriction_pa`` a suction sensor reads a line drop of 5 kPa at 3000 rpm ∝ speed² plus a restriction
+    of ``restriction_pa`` at 68 L/min ∝ flow² (100 Pa noise); the twin runs on that reading."""
     rng = np.random.default_rng(seed)
     out, t = [], 0.0
     for rpm, bar in POINTS:
-        pred = _flow(cfg, rpm, bar)
-        true = _flow(cfg, rpm, bar, **dict(fault)).mean_delivery_flow_m3s
+        p_s = P_ATM
+        if restriction_pa is not None:
+            q0 = _flow(cfg, rpm, bar).mean_delivery_flow_m3s
+            p_s = P_ATM - 5e3 * (rpm / 3000) ** 2 - restriction_pa * (q0 / 68.3 * 6e4) ** 2
+        pred = _flow(cfg, rpm, bar, p_s)
+        true = _flow(cfg, rpm, bar, p_s, **dict(fault)).mean_delivery_flow_m3s
         for _ in range(windows):
             t += 0.5
             q_meas = true * (1 + gain) + rng.normal(0.0, REL_SD * true)
-            out.append(WindowRecord(t, rpm * math.pi / 30, P_ATM + bar * 1e5, P_ATM, OIL_K, q_meas,
+            p_read = p_s + (0.0 if restriction_pa is None else rng.normal(0.0, 100.0))
+            out.append(WindowRecord(t, rpm * math.pi / 30, P_ATM + bar * 1e5, p_read, OIL_K, q_meas,
                                     pred.mean_delivery_flow_m3s, pred.theoretical_flow_m3s, REL_SD * q_meas))
     return out
 
@@ -122,6 +130,17 @@ def test_names_the_fault(plant, kind):
     recs = _records(cfg, fault, gain)
     d = classify(recs, [sig(r) for r in recs])
     assert d.kind == kind, (d.kind, d.probability)
+    assert d.confidence > 0.9
+
+
+@pytest.mark.parametrize("restriction_pa", [0.0, 4e4])
+def test_suction_restriction(plant, restriction_pa):
+    """Behaviour: with a suction sensor, a suction pressure that falls with the flow (40 kPa at 68 L/min) names
+    suction_restriction; one that falls with the speed only (the suction line) names no fault."""
+    cfg, sig = plant
+    recs = _records(cfg, {}, restriction_pa=restriction_pa)
+    d = classify(recs, [sig(r) for r in recs])
+    assert d.kind == ("suction_restriction" if restriction_pa else "healthy"), d.probability
     assert d.confidence > 0.9
 
 

@@ -26,6 +26,10 @@ Likelihood per kind
     parameter (Occam factor) as BIC does asymptotically.  A kind whose fitted θ has the sign the fault
     cannot have (a wear or air ingress that adds flow) beyond ``sign_sd`` standard deviations is
     excluded.  ``healthy``: e_i ~ N(0, σ_i²).  ``unknown``: e_i ~ N(0, (``unknown_scale``·σ_i)²).
+    ``suction_restriction``: the flow residuals as ``healthy`` (the twin runs on the measured suction
+    pressure, so the restriction's effect on the flow is in the prediction) times the likelihood ratio of
+    the suction pressures falling with the flow against falling with the speed only
+    (:func:`suction_log_ratio`); every other kind carries the suction pressures without that term.
 
 Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
@@ -44,13 +48,13 @@ import numpy as np
 from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.twin import leakage_filter as lf
 
-__all__ = ["SpeedCounter", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
+__all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
            "kind_log_likelihood", "classify", "missing_fraction", "KIND_CODES"]
 
 #: fault kinds with a flow signature, in the order of the signature columns
 FLOW_KINDS = ("tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift")
 #: every name the classifier can give; the index is the code published in ``twin/health`` (``fault``)
-KINDS = ("healthy", *FLOW_KINDS, "speed_dropout", "unknown")
+KINDS = ("healthy", *FLOW_KINDS, "suction_restriction", "speed_dropout", "unknown")
 KIND_CODES = {k: i for i, k in enumerate(KINDS)}
 #: sign θ can have (+1: the fault's own direction, a wear or air ingress that opens gaps / adds air; 0: either)
 _SIGN = {"tip_wear": 1, "lateral_wear": 1, "air_ingress": 1, "pressure_offset": 0, "flowmeter_drift": 0}
@@ -105,13 +109,15 @@ class DiagnosisSettings:
     chi2_z: float = 4.0
     sign_sd: float = 3.0
     dropout_min: float = 0.05
+    suction_sd_pa: float = 100.0
+    suction_prior_pa: float = 5e4
     rel_step: float = 0.1
     air_step: float = 0.01
     pressure_step_pa: float = 1e5
 
     def __post_init__(self):
         for name, lo, hi in (("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3),
-                             ("chi2_z", 0.0, 1e3), ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0),
+                             ("chi2_z", 0.0, 1e3), ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
                              ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)):
             check_range(f"diagnosis_{name}", getattr(self, name), lo, hi)
         if isinstance(self.horizon, bool) or not isinstance(self.horizon, int) or not 1 <= self.horizon <= 10**5:
@@ -198,6 +204,38 @@ class SpeedCounter:
         return len(inside), int(round((end_ns - start_ns) / period)) if period > 0 else 0
 
 
+def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float) -> tuple[float, float]:
+    """Log-likelihood ratio of a suction restriction against none, from the windows' suction pressures.
+
+    Without restriction p_s = c − a·ω² (the suction line's drop ∝ speed²); a restriction adds − b·q²
+    (its drop ∝ the intake flow², here the measured delivery flow, which at one speed falls with the
+    delivery pressure).  Both fitted by least squares with a common noise σ profiled out, its variance
+    floored at ``sd_floor_pa``² [Pa²]; the ratio carries the Occam factor ½·ln(1 + P_b / var b̂) of a
+    Gaussian prior on b with standard deviation ``prior_pa`` [Pa] / (largest theoretical flow)².
+
+    Returns
+    -------
+    tuple of float
+        Log-likelihood ratio [-] (−inf when the suction pressure never varies: no sensor) and the fitted
+        b [Pa·s²/m⁶] (0 with fewer than 4 windows).
+    """
+    n = len(records)
+    y = np.array([r.p_suction for r in records])
+    if n < 4 or np.ptp(y) == 0.0:
+        return -math.inf, 0.0
+    x0 = np.column_stack([np.ones(n), -np.array([r.omega for r in records]) ** 2])
+    x1 = np.column_stack([x0, -np.array([r.q_meas for r in records]) ** 2])
+    rss = []
+    for x in (x0, x1):
+        coef = np.linalg.lstsq(x, y, rcond=None)[0]
+        rss.append(float(np.sum((y - x @ coef) ** 2)) + n * sd_floor_pa ** 2)
+    col = np.abs(x1).max(axis=0)
+    col[col == 0] = 1.0                                                  # columns scaled: ω² ~ 1e5, q² ~ 1e-6
+    var_b = rss[1] / n * float(np.linalg.pinv((x1 / col).T @ (x1 / col))[2, 2]) / col[2] ** 2
+    prior_b = (prior_pa / max(r.q_th for r in records) ** 2) ** 2
+    return 0.5 * n * math.log(rss[0] / rss[1]) - 0.5 * math.log1p(prior_b / max(var_b, 1e-300)), float(coef[2])
+
+
 def missing_fraction(records) -> float:
     """Fraction of the shaft-speed samples missing over ``records`` [-] (0 when none were expected)."""
     expected = sum(r.speed_expected for r in records)
@@ -234,6 +272,9 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
         if _SIGN[kind] and th * _SIGN[kind] < -s.sign_sd * th_sd:
             continue                                    # the fault cannot move the flow that way
         ll[kind] = ll_k
+    ll["suction_restriction"], theta["suction_restriction"] = suction_log_ratio(recs, s.suction_sd_pa, s.suction_prior_pa)
+    ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
+    chi2["suction_restriction"] = chi2["healthy"]
     names = list(ll)
     v = np.array([ll[k] for k in names])
     p = np.exp(v - v.max())
