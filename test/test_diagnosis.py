@@ -88,14 +88,15 @@ def _flow(cfg, rpm, bar, p_suction=P_ATM, **fault):
     return run_steady(model, rpm, bar - off / 1e5, p_suction=p_suction, oil_temperature=OIL_K)
 
 
-def _records(cfg, fault: dict, gain: float = 0.0, seed: int = 0, windows: int = 3, restriction_pa: float | None = None):
+def _records(cfg, fault: dict, gain: float = 0.0, seed: int = 0, windows: int = 3, restriction_pa: float | None = None,
+             points=POINTS):
     """Window records of the pump with ``fault`` (scaled_config keywords, or offset_pa) and a meter gain.
 
     With ``restriction_pa`` a suction sensor reads a line drop of 5 kPa at 3000 rpm ∝ speed² plus a restriction
     of ``restriction_pa`` at 68 L/min ∝ flow² (100 Pa noise); the twin runs on that reading."""
     rng = np.random.default_rng(seed)
     out, t = [], 0.0
-    for rpm, bar in POINTS:
+    for rpm, bar in points:
         p_s = P_ATM
         if restriction_pa is not None:
             q0 = _flow(cfg, rpm, bar).mean_delivery_flow_m3s
@@ -142,6 +143,16 @@ def test_suction_restriction(plant, restriction_pa):
     d = classify(recs, [sig(r) for r in recs])
     assert d.kind == ("suction_restriction" if restriction_pa else "healthy"), d.probability
     assert d.confidence > 0.9
+
+
+def test_one_operating_point_names_no_kind(plant):
+    """Behaviour: at one operating point every kind fits the one residual: a fault, kind "unknown", with the
+    probability of a fault; a healthy pump is still "healthy"."""
+    cfg, sig = plant
+    for fault, expected in (({"tip": 2.0}, "unknown"), ({}, "healthy")):
+        recs = _records(cfg, fault, points=((1000, 25),))
+        d = classify(recs, [sig(r) for r in recs])
+        assert d.kind == expected and d.confidence > 0.9, d.probability
 
 
 def test_unknown_when_nothing_fits(plant):

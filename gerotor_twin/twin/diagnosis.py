@@ -34,7 +34,9 @@ Likelihood per kind
 Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
     also when the best kind's innovations have χ² > n + ``chi2_z``·√(2n) (no kind explains the
-    residuals).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
+    residuals), and when a flow kind wins on windows at fewer than two operating points (speed, delivery
+    pressure; :func:`point_key`): there every kind fits the one residual and only the priors differ.  The
+    confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
     samples missing over the horizon (:func:`missing_fraction`); above ``dropout_min`` it is named when
     the flow residuals are explained by ``healthy`` (confidence: that probability).
 """
@@ -49,7 +51,7 @@ from gerotor_twin.errors import InputError, check_range
 from gerotor_twin.twin import leakage_filter as lf
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
-           "kind_log_likelihood", "classify", "missing_fraction", "KIND_CODES"]
+           "kind_log_likelihood", "classify", "point_key", "missing_fraction", "KIND_CODES"]
 
 #: fault kinds with a flow signature, in the order of the signature columns
 FLOW_KINDS = ("tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift")
@@ -140,6 +142,14 @@ class Diagnosis:
     def code(self) -> int:
         """Index of :attr:`kind` in :data:`KINDS`."""
         return KIND_CODES[self.kind]
+
+
+def point_key(rec: WindowRecord, rpm_step: float = 10.0, pressure_step_pa: float = 5e3,
+              oil_step_k: float = 1.0) -> tuple:
+    """The record's operating point rounded to ``rpm_step`` [rpm], ``pressure_step_pa`` [Pa] (delivery, suction)
+    and ``oil_step_k`` [K]: (speed, delivery, suction, oil) in steps (oil None: the reference temperature)."""
+    return (round(rec.omega * 30.0 / math.pi / rpm_step), round(rec.p_delivery / pressure_step_pa),
+            round(rec.p_suction / pressure_step_pa), None if rec.oil_k is None else round(rec.oil_k / oil_step_k))
 
 
 def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float) -> tuple[float, float, float, float]:
@@ -285,10 +295,12 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     kind = best if prob[best] >= prob["unknown"] else "unknown"
     if chi2[best] > n + s.chi2_z * math.sqrt(2.0 * n):
         kind = "unknown"
+    if kind in FLOW_KINDS and len({point_key(r)[:2] for r in recs}) < 2:
+        kind = "unknown"                     # one operating point: every kind fits it, only the priors differ
     dropout = missing_fraction(recs)
     if kind == "healthy" and dropout > s.dropout_min:
         kind = "speed_dropout"
-    conf = prob["healthy"] if kind == "speed_dropout" else prob[kind]
+    conf = {"speed_dropout": prob["healthy"], "unknown": 1.0 - prob["healthy"]}.get(kind, prob.get(kind))
     return Diagnosis(kind, conf, ll, prob, theta, chi2[best], n, dropout)
 
 
@@ -344,9 +356,7 @@ class SteadySignatures:
     def __call__(self, rec: WindowRecord) -> dict:
         """Signature of each of :data:`FLOW_KINDS` at the record's operating point [m³/s per unit θ]."""
         rs, ps, ts = self.steps
-        rpm = rec.omega * 30.0 / math.pi
-        key = (round(rpm / rs), round(rec.p_delivery / ps), round(rec.p_suction / ps),
-               None if rec.oil_k is None else round(rec.oil_k / ts))
+        key = point_key(rec, rs, ps, ts)
         raw = self._cache.get(key)
         if raw is None:
             raw = self._cache[key] = self._raw(key[0] * rs, key[1] * ps, key[2] * ps,

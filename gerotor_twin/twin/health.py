@@ -30,8 +30,12 @@ stamped, on ``twin/health_update``)
     pump's ``range``) with k
     and its standard deviation, the same with k = 1 (calibrated), the residual
     (measured − predicted mean flow) of this interval, the mean and RMS of the last
-    ``residual_window`` residuals, the normalised innovation, the update count and
-    the status level.
+    ``residual_window`` residuals, the normalised innovation, the update count,
+    the status level, and the fault the classifier of :mod:`.diagnosis` names from the recent settled
+    windows (``fault``: its index in :data:`~.diagnosis.KINDS`, −1 not classified) with its probability
+    (``fault_confidence``).  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
+    oil temperature, measured and predicted flow, noise, shaft-speed samples received and expected) and
+    classified against the twin's steady sensitivities at its operating point; not with ``adapt``.
 Status (``/diagnostics`` ``gerotor_twin: health``)
     STALE until ``min_updates`` updates (no measured flow, or never steady); ERROR when
     the reference efficiency fell more than ``error_pt`` points below the calibrated
