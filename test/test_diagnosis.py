@@ -12,15 +12,10 @@ import pytest
 
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.model.clearance_scale import scaled_config
-from gerotor_twin.model.pump import PumpModel
-from gerotor_twin.model.steady import run_steady
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
                                          classify, kind_log_likelihood, missing_fraction)
+from gerotor_twin.offline.diagnosis_bench import MODEL_CASES as CASES, POINTS, model_records
 
-P_ATM = 101325.0
-OIL_K = 323.15
-POINTS = ((1000, 5), (1000, 25), (2500, 25), (2500, 5))
 REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
 
 
@@ -82,44 +77,8 @@ def plant():
     return cfg, SteadySignatures(cfg)
 
 
-def _flow(cfg, rpm, bar, p_suction=P_ATM, **fault):
-    off = fault.pop("offset_pa", 0.0)
-    model = PumpModel(scaled_config(cfg, **fault) if fault else cfg)
-    return run_steady(model, rpm, bar - off / 1e5, p_suction=p_suction, oil_temperature=OIL_K)
-
-
-def _records(cfg, fault: dict, gain: float = 0.0, seed: int = 0, windows: int = 3, restriction_pa: float | None = None,
-             points=POINTS):
-    """Window records of the pump with ``fault`` (scaled_config keywords, or offset_pa) and a meter gain.
-
-    With ``restriction_pa`` a suction sensor reads a line drop of 5 kPa at 3000 rpm ∝ speed² plus a restriction
-    of ``restriction_pa`` at 68 L/min ∝ flow² (100 Pa noise); the twin runs on that reading."""
-    rng = np.random.default_rng(seed)
-    out, t = [], 0.0
-    for rpm, bar in points:
-        p_s = P_ATM
-        if restriction_pa is not None:
-            q0 = _flow(cfg, rpm, bar).mean_delivery_flow_m3s
-            p_s = P_ATM - 5e3 * (rpm / 3000) ** 2 - restriction_pa * (q0 / 68.3 * 6e4) ** 2
-        pred = _flow(cfg, rpm, bar, p_s)
-        true = _flow(cfg, rpm, bar, p_s, **dict(fault)).mean_delivery_flow_m3s
-        for _ in range(windows):
-            t += 0.5
-            q_meas = true * (1 + gain) + rng.normal(0.0, REL_SD * true)
-            p_read = p_s + (0.0 if restriction_pa is None else rng.normal(0.0, 100.0))
-            out.append(WindowRecord(t, rpm * math.pi / 30, P_ATM + bar * 1e5, p_read, OIL_K, q_meas,
-                                    pred.mean_delivery_flow_m3s, pred.theoretical_flow_m3s, REL_SD * q_meas))
-    return out
-
-
-CASES = {
-    "healthy": ({}, 0.0),
-    "tip_wear": ({"tip": 2.0}, 0.0),
-    "lateral_wear": ({"lateral": 1.15}, 0.0),
-    "air_ingress": ({"air_fraction": 0.03}, 0.0),
-    "pressure_offset": ({"offset_pa": 1e5}, 0.0),
-    "flowmeter_drift": ({}, 0.05),
-}
+def _records(cfg, fault: dict, gain: float = 0.0, **kw):
+    return model_records(cfg, fault, gain, rel_sd=REL_SD, **kw)
 
 
 @pytest.mark.parametrize("kind", list(CASES))
