@@ -54,7 +54,7 @@ import collections
 import math
 from dataclasses import asdict, dataclass, replace
 
-from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.errors import InputError, check_int, check_range
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
@@ -151,9 +151,7 @@ class HealthSettings:
             check_range(f"health_{name}", getattr(self, name), lo, hi)
         for name, lo, hi in (("min_flow_samples", 1, 10**6), ("band_updates", 1, 10**6), ("min_updates", 1, 10**6),
                              ("residual_window", 1, 10**6)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-                raise InputError(f"health_{name}", v, f"an integer in [{lo}, {hi}]")
+            check_int(f"health_{name}", getattr(self, name), lo, hi)
         if self.error_pt < self.warn_pt:
             raise InputError("health_error_pt", self.error_pt, f"≥ health_warn_pt = {self.warn_pt:g}")
 
