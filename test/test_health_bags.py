@@ -187,6 +187,15 @@ def test_health_command_names_the_fault(wear_run, tmp_path):
         assert a["fault"] in ("tip_wear", "lateral_wear") and 0.3 < a["confidence"] <= 1.0
 
 
+def test_diagnostics_name_the_fault(wear_run):
+    """Behaviour: the last /diagnostics health status of the wear run names a wear in its text and values."""
+    rows = read_topics(wear_run, ["/diagnostics"])["/diagnostics"]
+    last = [st for msg in rows.messages for st in msg.status if st.name == HEALTH_STATUS][-1]
+    values = {kv.key: kv.value for kv in last.values}
+    assert values["fault"] in ("tip_wear", "lateral_wear")
+    assert f"fault: {values['fault']} (probability" in last.message
+
+
 @pytest.mark.parametrize("item", ["bogus=1", "adapt=maybe", "warn_pt=x", "warn_pt=-3"])
 def test_run_bag_bad_health_setting(tmp_path, capsys, item):
     """Bad input: a bad --health item is one line naming the setting; nothing is written."""
