@@ -48,7 +48,8 @@ def test_drift_forgets():
 
 
 def test_missing_speed_samples():
-    """Closed form: every fifth sample of a 100 Hz sensor missing → 20 %; none missing → 0."""
+    """Closed form: every fifth sample of a 100 Hz sensor missing → 20 %; none missing → 0; samples received in
+    bursts → no expected count."""
     c = SpeedCounter()
     for i in range(100):
         if i % 5:
@@ -58,6 +59,10 @@ def test_missing_speed_samples():
     rec = WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6, got, expected)
     assert missing_fraction([rec]) == pytest.approx(0.2)
     assert missing_fraction([WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)]) == 0.0
+    burst = SpeedCounter()                      # 10 samples every 10 ms, 0.1 ms apart: no period to count against
+    for i in range(100):
+        burst.add((i // 10) * 10_000_000 + (i % 10) * 100_000)
+    assert burst.count(0, 100_000_000) == (100, 0)
 
 
 def test_bad_settings():

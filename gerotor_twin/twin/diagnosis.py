@@ -190,7 +190,9 @@ class SpeedCounter:
     """Reception times of the accepted shaft-speed samples, for the count expected in a window.
 
     The sensor's period is the ``quantile`` of the intervals between the window's samples (the nominal one
-    while fewer than 1 − ``quantile`` of them are missing); expected = window length / period.
+    while fewer than 1 − ``quantile`` of them are missing); expected = window length / period.  When that
+    period is below half the mean interval — samples received in bursts, or more than half of them missing —
+    the reception times do not show the sensor's period and no count is expected.
     """
 
     def __init__(self, quantile: float = 0.25):
@@ -210,8 +212,11 @@ class SpeedCounter:
         inside = [t for t in self._t if t < end_ns]
         if len(inside) < 3:
             return len(inside), 0
-        period = float(np.quantile(np.diff(inside), self.quantile))
-        return len(inside), int(round((end_ns - start_ns) / period)) if period > 0 else 0
+        gaps = np.diff(inside)
+        period = float(np.quantile(gaps, self.quantile))
+        if not period > 0.5 * float(np.mean(gaps)):
+            return len(inside), 0
+        return len(inside), int(round((end_ns - start_ns) / period))
 
 
 def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float) -> tuple[float, float]:
