@@ -103,7 +103,14 @@ class WindowRecord:
 
 @dataclass(frozen=True)
 class DiagnosisSettings:
-    """Settings of the classifier (module doc); θ in fractions of the reference theoretical flow."""
+    """Settings of the classifier (module doc); θ in fractions of the reference theoretical flow.
+
+    ``horizon`` windows [-]; ``prior_sd`` [-] and ``drift_per_sqrt_s`` [1/√s] of θ; ``unknown_scale`` [-] (noise
+    factor of ``unknown``); ``chi2_z`` [-]; ``sign_sd`` [-]; ``dropout_min`` [-]; ``suction_sd_pa`` [Pa] (floor of
+    the suction pressure's noise) and ``suction_prior_pa`` [Pa] (prior restriction drop at the largest flow);
+    finite-difference steps ``rel_step`` [-] (clearance factor), ``air_step`` [-] (free-air fraction),
+    ``pressure_step_pa`` [Pa].
+    """
     horizon: int = 30
     prior_sd: float = 0.2
     drift_per_sqrt_s: float = 0.002
@@ -128,7 +135,23 @@ class DiagnosisSettings:
 
 @dataclass(frozen=True)
 class Diagnosis:
-    """Result of :func:`classify`: the named kind, its probability, every candidate's log-likelihood."""
+    """Result of :func:`classify`.
+
+    Attributes
+    ----------
+    kind : str
+        The named kind (:data:`KINDS`).
+    confidence : float
+        Its probability [-] (``unknown``: the probability of a fault; ``speed_dropout``: that of healthy flow).
+    log_likelihood, probability, parameter : dict
+        Per candidate: log-likelihood [-], probability [-], fitted θ [-] (suction restriction: b [Pa·s²/m⁶]).
+    chi2 : float
+        χ² of the best kind's normalised innovations [-].
+    windows : int
+        Windows used.
+    dropout : float
+        Fraction of the shaft-speed samples missing [-].
+    """
     kind: str
     confidence: float
     log_likelihood: dict
@@ -268,6 +291,13 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     signatures : sequence of dict
         Per record, the signature of each of :data:`FLOW_KINDS` [m³/s per unit θ] (:class:`SteadySignatures`).
     settings : DiagnosisSettings, optional
+
+    Returns
+    -------
+    Diagnosis
+        The named kind (:data:`KINDS`) and its confidence [-], every candidate's log-likelihood and
+        probability, the fitted θ per kind [-], the best kind's χ² [-], the windows used and the fraction of
+        speed samples missing [-].
     """
     s = settings or DiagnosisSettings()
     if len(records) != len(signatures):
