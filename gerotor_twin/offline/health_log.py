@@ -14,7 +14,7 @@ import numpy as np
 
 from ..io import McapReadError, open_mcap, read_topics
 from ..io.reader import multiarray_series
-from ..twin.health import HEALTH_FIELDS, LEVELS, alarm_intervals, alarm_records, fault_name
+from ..twin.health import HEALTH_FIELDS, LEVELS, alarm_intervals, alarm_records, fault_name, fault_text
 
 __all__ = ["load_health", "alarm_intervals", "LEVELS", "cmd_health", "add_parser"]
 
@@ -52,10 +52,10 @@ def cmd_health(args) -> int:
         print(f"  {ti:6.1f}  {r['leakage_factor']:.4f} ± {r['leakage_factor_sd']:.4f}  "
               f"{100 * r['reference_efficiency']:6.2f} ± {100 * r['reference_efficiency_sd']:.2f}  "
               f"{6e4 * r['residual_m3s']:+8.3f}          {LEVELS.get(int(r['level']), '?'):5s}  "
-              f"{_fault_text(fault_name(r), r.get('fault_confidence'))}")
+              f"{fault_text(fault_name(r), r.get('fault_confidence'))}")
     alarms = alarm_records(t, rows)
     for a in alarms:
-        print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: {_fault_text(a['fault'], a['confidence'])}")
+        print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: {fault_text(a['fault'], a['confidence'])}")
     if not alarms:
         print("  no WARN or ERROR")
     if args.json:
@@ -64,13 +64,6 @@ def cmd_health(args) -> int:
                                                "alarm_records": alarms}, indent=1))
         print(f"wrote {args.json}")
     return 0
-
-
-def _fault_text(name: str | None, p: float | None) -> str:
-    """A fault the classifier named, with its probability ``p`` [-] (``-`` when none was)."""
-    if name in (None, "-"):
-        return "-"
-    return name if p is None or not np.isfinite(p) else f"{name} ({p:.2f})"
 
 
 def add_parser(sub) -> None:

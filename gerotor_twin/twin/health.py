@@ -62,7 +62,7 @@ from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEAL
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
-           "LEVELS", "alarm_intervals", "alarm_records", "fault_name"]
+           "LEVELS", "alarm_intervals", "alarm_records", "fault_name", "fault_text"]
 
 #: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
@@ -102,6 +102,13 @@ def alarm_records(t, rows: list[dict]) -> list[dict]:
         out.append({"start_s": a, "end_s": b, "level": name, "fault": None if fault == "-" else fault,
                     "confidence": conf if fault != "-" and math.isfinite(conf) else None})
     return out
+
+
+def fault_text(name: str | None, p: float | None) -> str:
+    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was)."""
+    if name in (None, "-"):
+        return "-"
+    return name if p is None or not math.isfinite(p) else f"{name} ({p:.2f})"
 
 
 def fault_name(row: dict) -> str:
