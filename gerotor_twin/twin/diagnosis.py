@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gerotor_twin.errors import InputError, check_int, check_range
+from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.twin import leakage_filter as lf
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
@@ -125,11 +125,10 @@ class DiagnosisSettings:
     pressure_step_pa: float = 1e5
 
     def __post_init__(self):
-        for name, lo, hi in (("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3),
-                             ("chi2_z", 0.0, 1e3), ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0),
-                             ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6), ("rel_step", 1e-4, 1.0),
-                             ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)):
-            check_range(f"diagnosis_{name}", getattr(self, name), lo, hi)
+        check_ranges(self, "diagnosis_", (
+            ("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3), ("chi2_z", 0.0, 1e3),
+            ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
+            ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)))
         check_int("diagnosis_horizon", self.horizon, 1, 10**5)
 
 

@@ -54,7 +54,7 @@ import collections
 import math
 from dataclasses import asdict, dataclass, replace
 
-from gerotor_twin.errors import InputError, check_int, check_range
+from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
@@ -150,12 +150,11 @@ class HealthSettings:
     reference_oil_c: float = 50.0
 
     def __post_init__(self):
-        for name, lo, hi in (("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0),
-                             ("pressure_tol_pa", 1.0, 1e7), ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0),
-                             ("drift_per_sqrt_s", 0.0, 10.0), ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0),
-                             ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3), ("reference_rpm", 1.0, 1e5),
-                             ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)):
-            check_range(f"health_{name}", getattr(self, name), lo, hi)
+        check_ranges(self, "health_", (
+            ("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0), ("pressure_tol_pa", 1.0, 1e7),
+            ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0), ("drift_per_sqrt_s", 0.0, 10.0),
+            ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0), ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3),
+            ("reference_rpm", 1.0, 1e5), ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)))
         for name, lo, hi in (("min_flow_samples", 1, 10**6), ("band_updates", 1, 10**6), ("min_updates", 1, 10**6),
                              ("residual_window", 1, 10**6)):
             check_int(f"health_{name}", getattr(self, name), lo, hi)
