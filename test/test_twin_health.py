@@ -90,6 +90,13 @@ def test_tracks_leakage_factor_on_steady_operation(monitor):
     assert {kv["key"]: kv["value"] for kv in st["values"]}["fault"] == "unknown"
 
 
+def test_window_outside_the_range_is_not_classified(monitor):
+    """Behaviour: a settled window above the pump's speed range still updates k but is not classified (the
+    steady model cannot run there); the monitor keeps running."""
+    Feed(monitor).run(4.0, 1.0, omega=400.0)          # 3820 rpm > 3000 rpm
+    assert monitor.est.updates >= 1 and monitor.windows == [] and monitor.fault_values()[0] == -1.0
+
+
 def test_ramps_and_meter_lag_are_not_used(monitor):
     """Behaviour: during a speed ramp no update happens; after the ramp the first settle_s (meter still
     lagging: it reads a wrong flow then) are ignored too, so the estimate is that of the true pump."""

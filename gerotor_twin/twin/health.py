@@ -91,6 +91,7 @@ def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
         closed.append(prev)
     return closed
 
+
 def alarm_records(t, rows: list[dict]) -> list[dict]:
     """The alarm intervals of :func:`alarm_intervals` as ``{"start_s", "end_s", "level", "fault", "confidence"}``:
     the fault the classifier named at the interval's last update (:data:`~.diagnosis.KINDS`; None when the
@@ -351,8 +352,12 @@ class HealthMonitor:
             s = self.settings
             self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
                                                   reference=(s.reference_rpm, s.reference_bar))
+        try:
+            signature = self._signature_of(rec)
+        except InputError:
+            return                  # outside the pump's range (a steady model cannot run there): not classified
         self.windows.append(rec)
-        self.signatures.append(self._signature_of(rec))
+        self.signatures.append(signature)
         keep = self._signature_of.settings.horizon
         del self.windows[:-keep], self.signatures[:-keep]
         self.diagnosis = classify(self.windows, self.signatures, self._signature_of.settings)
