@@ -348,11 +348,11 @@ class HealthMonitor:
                            w.op[3] / w.oil_ticks if w.oil_ticks else None, q_meas, q_pred, q_th, sd, got, expected)
         if self.settings.adapt or w.ticks == 0:
             return
-        if self._signature_of is None:
-            s = self.settings
-            self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
-                                                  reference=(s.reference_rpm, s.reference_bar))
+        s = self.settings
         try:
+            if self._signature_of is None:
+                self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
+                                                      reference=(s.reference_rpm, s.reference_bar))
             signature = self._signature_of(rec)
         except InputError:
             return                  # outside the pump's range (a steady model cannot run there): not classified
