@@ -13,7 +13,7 @@ import sys
 import warnings
 from typing import Any, Iterator
 
-__all__ = ["InputError", "check_range", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS",
+__all__ = ["InputError", "check_range", "check_ranges", "check_int", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS",
            "one_line_warnings"]
 
 #: Longest error line printed or put on /diagnostics [characters]; each part of an
@@ -135,3 +135,23 @@ def check_range(field: str, value: float, lo: float | None = None, hi: float | N
         hi_s = "inf" if hi is None else f"{hi:g}"
         raise InputError(field, value, f"{left}{lo_s}, {hi_s}{right}{(' ' + unit) if unit else ''}")
     return v
+
+
+def check_int(field: str, value, lo: int, hi: int) -> int:
+    """Check that ``value`` is an integer (not a bool) in ``[lo, hi]``; return it.
+
+    Raises
+    ------
+    InputError
+        Naming ``field``, the value and ``an integer in [lo, hi]``.
+    """
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise InputError(field, value, f"an integer in [{lo}, {hi}]")
+    return value
+
+
+def check_ranges(obj, prefix: str, ranges) -> None:
+    """:func:`check_range` on each attribute of ``obj`` named in ``ranges`` ((name, lo, hi), ...), the error
+    naming ``prefix + name``."""
+    for name, lo, hi in ranges:
+        check_range(f"{prefix}{name}", getattr(obj, name), lo, hi)

@@ -86,9 +86,10 @@ def test_bad_arguments_are_one_line(tmp_path, bags, capsys):
 
 
 def test_fleet_rows_carry_health(local_fleet):
-    """Behaviour: a good row carries the health monitor's last state of its twin log (level, k ± sd) as
-    `gerotor-twin health` reads it; CSV and HTML show it."""
+    """Behaviour: a good row carries the health monitor's last state of its twin log (level, k ± sd, the fault
+    named) as `gerotor-twin health` reads it; CSV and HTML show it."""
     from gerotor_twin.offline.health_log import LEVELS, load_health
+    from gerotor_twin.twin.diagnosis import KINDS
     r = _rows(local_fleet)["bench_1"]
     t, hist = load_health(r["twin"])
     h = r["health"]
@@ -99,6 +100,7 @@ def test_fleet_rows_carry_health(local_fleet):
     assert table["bench_1"]["health"] == h["level"]
     assert float(table["bench_1"]["health_leakage_factor"]) == h["leakage_factor"]
     assert f"<b>{h['level']}</b>: k = {h['leakage_factor']:.3f}" in (local_fleet / "fleet.html").read_text()
+    assert h["fault"] == KINDS[int(hist[-1]["fault"])] and f"fault: {h['fault']}" in (local_fleet / "fleet.html").read_text()
 
 
 @pytest.mark.slow

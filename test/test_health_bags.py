@@ -23,6 +23,7 @@ from gerotor_twin.model.pump import PumpModel
 from gerotor_twin.model.steady import run_steady
 from gerotor_twin.offline.run_bag import run_bag
 from gerotor_twin.twin import TwinSettings
+from gerotor_twin.twin.diagnosis import KINDS
 from gerotor_twin.twin.health import HEALTH_FIELDS, HEALTH_STATUS, HealthSettings
 from gerotor_twin.units import celsius_to_kelvin
 
@@ -149,7 +150,8 @@ def test_wear_estimate_follows_emulated_factor(wear_run, emulated):
 
 
 def test_no_false_alarm_on_healthy_bag(tmp_path):
-    """Behaviour: on the healthy transient bag the health status never leaves OK (after learning)."""
+    """Behaviour: on the healthy transient bag the health status never leaves OK (after learning) and the
+    classifier names no fault once learnt."""
     out = tmp_path / "tr.mcap"
     bag = BAGS / "bench_transient.mcap"
     run_bag(bag, out, config_path=FITTED, progress=None, settings=_twin_settings(bag))
@@ -158,6 +160,7 @@ def test_no_false_alarm_on_healthy_bag(tmp_path):
     assert {r["level"] for r in rows} <= {0.0, 3.0}
     assert set(_health_statuses(out)) <= {0, 3}
     assert max(abs(r["leakage_factor"] - 1) for r in rows) < 0.05
+    assert {KINDS[int(r["fault"])] for r in rows if r["level"] != 3.0} == {"healthy"}
 
 
 def test_health_command_lists_alarm_intervals(wear_run, tmp_path, capsys):
@@ -169,6 +172,28 @@ def test_health_command_lists_alarm_intervals(wear_run, tmp_path, capsys):
     assert "WARN from" in out and "ERROR from" in out
     alarms = json.loads(js.read_text())["alarms"]
     assert [a[0] for a in alarms] == ["WARN", "ERROR"] and alarms[0][2] < alarms[1][1]
+
+
+def test_health_command_names_the_fault(wear_run, tmp_path):
+    """Behaviour (end to end: emulated bench → run-bag → health): every alarm of the wear bag (tip and lateral
+    clearance opening together) is named a wear, with its probability; the printed alarm lines name it."""
+    from gerotor_twin.cli import main
+    js = tmp_path / "h.json"
+    assert main(["health", str(wear_run), "--json", str(js)]) == 0
+    records = json.loads(js.read_text())["alarm_records"]
+    assert [a["level"] for a in records] == ["WARN", "ERROR"]
+    for a in records:
+        assert set(a) == {"start_s", "end_s", "level", "fault", "confidence"}
+        assert a["fault"] in ("tip_wear", "lateral_wear") and 0.3 < a["confidence"] <= 1.0
+
+
+def test_diagnostics_name_the_fault(wear_run):
+    """Behaviour: the last /diagnostics health status of the wear run names a wear in its text and values."""
+    rows = read_topics(wear_run, ["/diagnostics"])["/diagnostics"]
+    last = [st for msg in rows.messages for st in msg.status if st.name == HEALTH_STATUS][-1]
+    values = {kv.key: kv.value for kv in last.values}
+    assert values["fault"] in ("tip_wear", "lateral_wear")
+    assert f"fault: {values['fault']} (probability" in last.message
 
 
 @pytest.mark.parametrize("item", ["bogus=1", "adapt=maybe", "warn_pt=x", "warn_pt=-3"])

@@ -8,6 +8,7 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.model.pump import Inputs
 from gerotor_twin.ros.params import PARAMETERS, health_settings
 from gerotor_twin.twin import leakage_filter as lf
+from gerotor_twin.twin.diagnosis import KINDS
 from gerotor_twin.twin.health import HEALTH_FIELDS, HEALTH_STATUS, HealthMonitor, HealthSettings
 from gerotor_twin.twin.outputs import HEALTH, summary
 
@@ -82,6 +83,18 @@ def test_tracks_leakage_factor_on_steady_operation(monitor):
     assert v["clearance_factor"] == pytest.approx(v["leakage_factor"] ** (1 / monitor.exponent))
     st = monitor.status()
     assert st["name"] == HEALTH_STATUS and st["level"] == want
+    # every update's window recorded and classified: one operating point, so a fault of unknown kind
+    assert len(monitor.windows) == est.updates and monitor.windows[-1].omega == pytest.approx(157.0)
+    assert KINDS[int(v["fault"])] == "unknown" and v["fault_confidence"] > 0.9
+    assert "fault: unknown (probability" in st["message"]
+    assert {kv["key"]: kv["value"] for kv in st["values"]}["fault"] == "unknown"
+
+
+def test_window_outside_the_range_is_not_classified(monitor):
+    """Behaviour: a settled window above the pump's speed range still updates k but is not classified (the
+    steady model cannot run there); the monitor keeps running."""
+    Feed(monitor).run(4.0, 1.0, omega=400.0)          # 3820 rpm > 3000 rpm
+    assert monitor.est.updates >= 1 and monitor.windows == [] and monitor.fault_values()[0] == -1.0
 
 
 def test_ramps_and_meter_lag_are_not_used(monitor):
@@ -120,6 +133,7 @@ def test_adapt_feeds_back_into_model(fixed_model):
     assert mon.k_applied > 1.2
     assert model.config.clearances.tooth_tip_m == pytest.approx(tip0 * c)
     assert model.kernel.pc.tip_clearance == pytest.approx(tip0 * c)
+    assert mon.fault_values()[0] == -1.0 and mon.diagnosis is None       # adapt: the residuals are not classified
     mon2 = HealthMonitor(fixed_model, HealthSettings())
     Feed(mon2).run(8.0, 1.3)
     assert fixed_model.config.clearances.tooth_tip_m == tip0

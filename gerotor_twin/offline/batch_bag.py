@@ -57,7 +57,9 @@ def summary_row(bench, result: dict, p_atm: float) -> dict:
 
 def health_summary(twin_log) -> dict | None:
     """The health monitor's final state in a twin log: level name, leakage factor ± sd, reference η_v,
-    alarm intervals [s]; ``None`` when the log has no health update (no measured flow, never steady)."""
+    alarm intervals [s], the fault the classifier named and its probability [-]; ``None`` when the log has
+    no health update (no measured flow, never steady)."""
+    from ..twin.health import fault_name
     from .health_log import LEVELS, alarm_intervals, load_health
     try:
         t, rows = load_health(twin_log)
@@ -67,7 +69,8 @@ def health_summary(twin_log) -> dict | None:
     return {"level": LEVELS.get(int(last["level"]), "?"), "updates": len(rows),
             "leakage_factor": last["leakage_factor"], "leakage_factor_sd": last["leakage_factor_sd"],
             "reference_efficiency": last["reference_efficiency"],
-            "alarms": [list(a) for a in alarm_intervals(t, rows)]}
+            "alarms": [list(a) for a in alarm_intervals(t, rows)], "fault": fault_name(last),
+            "fault_confidence": last.get("fault_confidence")}
 
 
 def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s: float = 0.0) -> dict:

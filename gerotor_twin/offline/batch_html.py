@@ -69,12 +69,20 @@ def _row(out: Path, r: dict) -> str:
 
 
 def _health_cell(h: dict | None) -> str:
-    """Last health level with the leakage factor ± 1σ and the alarm intervals (s from the start)."""
+    """Last health level with the leakage factor ± 1σ, the fault named, and the alarm intervals (s from the start)."""
     if not h:
         return "n/a (no health update: no measured flow or never steady)"
     alarms = ", ".join(f"{a[0]} {a[1]:.0f}–{a[2]:.0f} s" for a in h.get("alarms", []))
     return (f"<b>{_e(h['level'])}</b>: k = {h['leakage_factor']:.3f} ± {h['leakage_factor_sd']:.3f}, "
-            f"η<sub>v,ref</sub> {100 * h['reference_efficiency']:.1f} %" + (f"<br>{_e(alarms)}" if alarms else ""))
+            f"η<sub>v,ref</sub> {100 * h['reference_efficiency']:.1f} %" + _fault_html(h)
+            + (f"<br>{_e(alarms)}" if alarms else ""))
+
+
+def _fault_html(h: dict) -> str:
+    """``, fault: <kind> (p)`` when the log's last update names one (older logs: nothing)."""
+    from ..twin.health import fault_text
+    text = fault_text(h.get("fault"), h.get("fault_confidence"))
+    return "" if text == "-" else f", fault: {_e(text)}"
 
 
 def _fit_cell(cal: dict | None) -> str:

@@ -2,7 +2,8 @@
 
 Reads ``twin/health`` (see :mod:`gerotor_twin.twin.health`) from a node log or a
 ``run-bag`` output and prints one line per update (or every ``--every``-th) and the
-intervals spent in WARN and ERROR.
+intervals spent in WARN and ERROR, each with the fault the classifier named at its last update
+(:mod:`gerotor_twin.twin.diagnosis`) and that fault's probability.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from ..io import McapReadError, open_mcap, read_topics
 from ..io.reader import multiarray_series
-from ..twin.health import HEALTH_FIELDS, LEVELS, alarm_intervals
+from ..twin.health import HEALTH_FIELDS, LEVELS, alarm_intervals, alarm_records, fault_name, fault_text
 
 __all__ = ["load_health", "alarm_intervals", "LEVELS", "cmd_health", "add_parser"]
 
@@ -44,21 +45,23 @@ def cmd_health(args) -> int:
     t, rows = load_health(args.log)
     every = max(1, args.every)
     print(f"{args.log}: {len(rows)} health updates over {t[-1]:.1f} s")
-    print("   t [s]  leakage factor      eta_ref [%]      residual [L/min]  level")
+    print("   t [s]  leakage factor      eta_ref [%]      residual [L/min]  level  fault (probability)")
     for i, (ti, r) in enumerate(zip(t, rows)):
         if i % every and i != len(rows) - 1:
             continue
         print(f"  {ti:6.1f}  {r['leakage_factor']:.4f} ± {r['leakage_factor_sd']:.4f}  "
               f"{100 * r['reference_efficiency']:6.2f} ± {100 * r['reference_efficiency_sd']:.2f}  "
-              f"{6e4 * r['residual_m3s']:+8.3f}          {LEVELS.get(int(r['level']), '?')}")
-    alarms = alarm_intervals(t, rows)
-    for name, a, b in alarms:
-        print(f"  {name} from {a:.1f} s to {b:.1f} s")
+              f"{6e4 * r['residual_m3s']:+8.3f}          {LEVELS.get(int(r['level']), '?'):5s}  "
+              f"{fault_text(fault_name(r), r.get('fault_confidence'))}")
+    alarms = alarm_records(t, rows)
+    for a in alarms:
+        print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: {fault_text(a['fault'], a['confidence'])}")
     if not alarms:
         print("  no WARN or ERROR")
     if args.json:
         Path(args.json).write_text(json.dumps({"t_s": t.tolist(), "updates": rows,
-                                               "alarms": [list(a) for a in alarms]}, indent=1))
+                                               "alarms": [[a["level"], a["start_s"], a["end_s"]] for a in alarms],
+                                               "alarm_records": alarms}, indent=1))
         print(f"wrote {args.json}")
     return 0
 
@@ -67,5 +70,6 @@ def add_parser(sub) -> None:
     p = sub.add_parser("health", help="print the health estimate (twin/health) of a twin log and its alarms")
     p.add_argument("log", help="node log or run-bag output (MCAP)")
     p.add_argument("--every", type=int, default=1, help="print every N-th update (default 1)")
-    p.add_argument("--json", metavar="F", help="write every update and the alarm intervals as JSON")
+    p.add_argument("--json", metavar="F", help="write every update and the alarm intervals as JSON (alarm_records: "
+                                               "start_s, end_s, level, fault, confidence per alarm)")
     p.set_defaults(func=cmd_health)

@@ -176,7 +176,10 @@ class TwinCore:
         return self._health_sample(kind, self.book.add_message(kind, msg, receive_ns, sequence), receive_ns)
 
     def _health_sample(self, kind: str, accepted: bool, receive_ns: int) -> bool:
-        """Hand an accepted measured flow sample to the health monitor; returns ``accepted``."""
+        """Hand an accepted measured flow sample (and the reception of a shaft-speed sample) to the health
+        monitor; returns ``accepted``."""
+        if accepted and kind == "shaft_speed":
+            self.health.add_speed(receive_ns)
         if accepted and kind == "delivery_flow":
             with self.book.lock:
                 last = self.book.channels["delivery_flow"].latest()

@@ -30,8 +30,12 @@ stamped, on ``twin/health_update``)
     pump's ``range``) with k
     and its standard deviation, the same with k = 1 (calibrated), the residual
     (measured − predicted mean flow) of this interval, the mean and RMS of the last
-    ``residual_window`` residuals, the normalised innovation, the update count and
-    the status level.
+    ``residual_window`` residuals, the normalised innovation, the update count,
+    the status level, and the fault the classifier of :mod:`.diagnosis` names from the recent settled
+    windows (``fault``: its index in :data:`~.diagnosis.KINDS`, −1 not classified) with its probability
+    (``fault_confidence``).  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
+    oil temperature, measured and predicted flow, noise, shaft-speed samples received and expected) and
+    classified against the twin's steady sensitivities at its operating point; not with ``adapt``.
 Status (``/diagnostics`` ``gerotor_twin: health``)
     STALE until ``min_updates`` updates (no measured flow, or never steady); ERROR when
     the reference efficiency fell more than ``error_pt`` points below the calibrated
@@ -50,14 +54,15 @@ import collections
 import math
 from dataclasses import asdict, dataclass, replace
 
-from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
+from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
-           "LEVELS", "alarm_intervals"]
+           "LEVELS", "alarm_intervals", "alarm_records", "fault_name", "fault_text"]
 
 #: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
@@ -86,10 +91,38 @@ def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
         closed.append(prev)
     return closed
 
+
+def alarm_records(t, rows: list[dict]) -> list[dict]:
+    """The alarm intervals of :func:`alarm_intervals` as ``{"start_s", "end_s", "level", "fault", "confidence"}``:
+    the fault the classifier named at the interval's last update (:data:`~.diagnosis.KINDS`; None when the
+    log carries no diagnosis or it was not classified) and its probability [-] (None alike)."""
+    out = []
+    for name, a, b in alarm_intervals(t, rows):
+        r = rows[next(i for i, ti in enumerate(t) if float(ti) == b)]
+        fault, conf = fault_name(r), float(r.get("fault_confidence", math.nan))
+        out.append({"start_s": a, "end_s": b, "level": name, "fault": None if fault == "-" else fault,
+                    "confidence": conf if fault != "-" and math.isfinite(conf) else None})
+    return out
+
+
+def fault_text(name: str | None, p: float | None) -> str:
+    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was)."""
+    if name in (None, "-"):
+        return "-"
+    return name if p is None or not math.isfinite(p) else f"{name} ({p:.2f})"
+
+
+def fault_name(row: dict) -> str:
+    """The fault named in one health update (:data:`~.diagnosis.KINDS`; ``-`` when none was)."""
+    code = float(row.get("fault", -1.0))
+    return KINDS[int(code)] if math.isfinite(code) and 0 <= int(code) < len(KINDS) else "-"
+
+
 HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
                  "reference_efficiency_sd", "calibrated_reference_efficiency", "residual_m3s",
-                 "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level")
+                 "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level", "fault",
+                 "fault_confidence")
 NS = 1_000_000_000
 
 
@@ -118,17 +151,14 @@ class HealthSettings:
     reference_oil_c: float = 50.0
 
     def __post_init__(self):
-        for name, lo, hi in (("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0),
-                             ("pressure_tol_pa", 1.0, 1e7), ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0),
-                             ("drift_per_sqrt_s", 0.0, 10.0), ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0),
-                             ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3), ("reference_rpm", 1.0, 1e5),
-                             ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)):
-            check_range(f"health_{name}", getattr(self, name), lo, hi)
+        check_ranges(self, "health_", (
+            ("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0), ("pressure_tol_pa", 1.0, 1e7),
+            ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0), ("drift_per_sqrt_s", 0.0, 10.0),
+            ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0), ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3),
+            ("reference_rpm", 1.0, 1e5), ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)))
         for name, lo, hi in (("min_flow_samples", 1, 10**6), ("band_updates", 1, 10**6), ("min_updates", 1, 10**6),
                              ("residual_window", 1, 10**6)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-                raise InputError(f"health_{name}", v, f"an integer in [{lo}, {hi}]")
+            check_int(f"health_{name}", getattr(self, name), lo, hi)
         if self.error_pt < self.warn_pt:
             raise InputError("health_error_pt", self.error_pt, f"≥ health_warn_pt = {self.warn_pt:g}")
 
@@ -192,6 +222,17 @@ class _Window:
     q_pred: float = 0.0
     q_th: float = 0.0
     loss: float = 0.0
+    ticks: int = 0
+    op: tuple = (0.0, 0.0, 0.0, 0.0)     #: sums of omega, p_delivery, p_suction, oil temperature (K) over ticks
+    oil_ticks: int = 0
+
+    def add_inputs(self, inputs) -> None:
+        """Accumulate the tick's operating point (the model's held inputs)."""
+        t_oil = getattr(inputs, "oil_temperature", None)
+        self.ticks += 1
+        self.oil_ticks += t_oil is not None
+        self.op = tuple(a + b for a, b in zip(self.op, (inputs.omega, inputs.p_delivery, inputs.p_suction,
+                                                          0.0 if t_oil is None else t_oil)))
 
 
 class HealthMonitor:
@@ -217,15 +258,25 @@ class HealthMonitor:
         self._out_of_band = 0
         self.last_residual = math.nan
         self.history: list[dict] = []
+        self.windows: list[WindowRecord] = []
+        self.signatures: list[dict] = []
+        self.diagnosis: Diagnosis | None = None
+        self._signature_of = None
+        self._speed = SpeedCounter()
 
     # ------------------------------------------------------------- inputs
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
         """A measured delivery flow sample [m³/s] (accepted by the input book)."""
         self._flow.add(value_m3s, receive_ns)
 
+    def add_speed(self, receive_ns: int) -> None:
+        """A shaft-speed sample was accepted at ``receive_ns`` [ns] (input accounting for the diagnosis)."""
+        self._speed.add(receive_ns)
+
     def clock_jumped_back(self, now_ns: int) -> None:
         """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
         self._flow.forget_after(now_ns)
+        self._speed.forget_after(now_ns)
 
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
@@ -236,6 +287,8 @@ class HealthMonitor:
         if w is None:
             self._win = _Window(now_ns)
             return []
+        if inputs is not None:
+            w.add_inputs(inputs)
         for msg in messages:
             if msg.topic == FLOW_SUMMARY and msg.stamp_ns >= w.start_ns:
                 q, qth, loss, _eta = msg.msg["data"][:4]
@@ -275,6 +328,7 @@ class HealthMonitor:
         est = lf.predict(self.est, end_ns / NS, s.drift_per_sqrt_s)
         self.est = lf.update(est, q_th - q_meas, loss / self.k_applied, max(r, 1e-18))
         self.last_residual = q_meas - q_pred
+        self._diagnose(w, end_ns, q_meas, q_pred, q_th, math.sqrt(max(r, 1e-18)))
         self._res.append(self.last_residual)
         self._out_of_band = self._out_of_band + 1 if abs(self.est.innovation) > s.residual_band else 0
         if s.adapt and self.est.updates >= s.min_updates and abs(self.est.k / self.k_applied - 1) > 0.01:
@@ -284,6 +338,29 @@ class HealthMonitor:
         return [OutputMessage(HEALTH_TOPIC, m.FLOAT64_MULTIARRAY, end_ns,
                               m.float64_multiarray(values, (",".join(HEALTH_FIELDS),))),
                 named_values(HEALTH_UPDATE, end_ns, HEALTH_FIELDS, values)]
+
+    def _diagnose(self, w: _Window, end_ns: int, q_meas: float, q_pred: float, q_th: float, sd: float) -> None:
+        """Record the window (:class:`~.diagnosis.WindowRecord`) and classify the recent ones (not with adapt:
+        the residuals are then against a moving model)."""
+        got, expected = self._speed.count(w.start_ns, end_ns)
+        n = max(w.ticks, 1)
+        rec = WindowRecord(end_ns / NS, w.op[0] / n, w.op[1] / n, w.op[2] / n,
+                           w.op[3] / w.oil_ticks if w.oil_ticks else None, q_meas, q_pred, q_th, sd, got, expected)
+        if self.settings.adapt or w.ticks == 0:
+            return
+        s = self.settings
+        try:
+            if self._signature_of is None:
+                self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
+                                                      reference=(s.reference_rpm, s.reference_bar))
+            signature = self._signature_of(rec)
+        except InputError:
+            return                  # outside the pump's range (a steady model cannot run there): not classified
+        self.windows.append(rec)
+        self.signatures.append(signature)
+        keep = self._signature_of.settings.horizon
+        del self.windows[:-keep], self.signatures[:-keep]
+        self.diagnosis = classify(self.windows, self.signatures, self._signature_of.settings)
 
     def _adapt(self, k: float) -> None:
         from gerotor_twin.model.clearance_scale import scale_clearances
@@ -317,7 +394,13 @@ class HealthMonitor:
         rms = math.sqrt(sum(v * v for v in res) / len(res)) if res else math.nan
         return [e.k, e.sd, max(e.k, 0.0) ** (1 / self.exponent), self.reference_efficiency(e.k), e.sd * self.loss_ref / self.qth_ref,
                 self.reference_efficiency(1.0), self.last_residual, mean, rms, e.innovation, float(e.updates),
-                float(self.level())]
+                float(self.level()), *self.fault_values()]
+
+    def fault_values(self) -> tuple[float, float]:
+        """The diagnosis as published: code of the named kind (index in :data:`~.diagnosis.KINDS`, −1: not
+        classified) and its probability [-]."""
+        d = self.diagnosis
+        return (-1.0, math.nan) if d is None else (float(d.code), d.confidence)
 
     def status(self) -> dict:
         """``diagnostic_msgs/DiagnosticStatus`` dict ``gerotor_twin: health``."""
@@ -333,8 +416,13 @@ class HealthMonitor:
                     f"({self.drop_pt():+.2f} pt below calibrated; WARN > {s.warn_pt:g}, ERROR > {s.error_pt:g})")
             if self._out_of_band >= s.band_updates:
                 text += f"; residual outside ±{s.residual_band:g} σ for {self._out_of_band} intervals"
+            if self.diagnosis is not None:
+                d = self.diagnosis
+                text += f"; fault: {d.kind} (probability {d.confidence:.2f} over {d.windows} intervals)"
         vals = {k: f"{x:.6g}" for k, x in v.items()}
         vals.update({"adapt": str(s.adapt).lower(), "reference_rpm": f"{s.reference_rpm:g}",
                      "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
                      "drop_pt": f"{self.drop_pt():.3f}", "model_eta_sd_from_calibration": f"{self.eta_rmse_cal:.4g}"})
+        if self.diagnosis is not None:
+            vals.update({"fault": self.diagnosis.kind, "speed_samples_missing": f"{self.diagnosis.dropout:.4f}"})
         return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)

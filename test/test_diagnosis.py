@@ -1,0 +1,140 @@
+"""Fault classifier (gerotor_twin.twin.diagnosis): the likelihood in closed form, the named kind on window records.
+
+The behaviour tests build the settled windows of a faulty pump from the twin's own steady model (the fault
+applied in full, not linearised: tip clearance × 2 or lateral × 1.15, 3 % free air, a 1 bar transducer offset, a 5 %
+meter gain) at four operating points (1000 / 2500 rpm × 5 / 25 bar, 50 °C), with the monitor's noise, and
+check that the classifier names the fault.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from gerotor_twin.config import load_config
+from gerotor_twin.errors import InputError
+from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
+                                         classify, kind_log_likelihood, missing_fraction)
+from gerotor_twin.offline.diagnosis_bench import MODEL_CASES as CASES, POINTS, model_records
+
+REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
+
+
+def test_likelihood_closed_form():
+    """Closed form: with zero drift the Kalman likelihood of a pure flow-meter gain is the marginal likelihood
+    log N(e; 0, diag σ² + P0·q qᵀ) and the fitted gain the Gaussian posterior mean Σqe/σ² / (1/P0 + Σq²/σ²)."""
+    rng = np.random.default_rng(1)
+    q = rng.uniform(1e-4, 1e-3, 12)
+    sd = 0.004 * q
+    e = 0.05 * q + rng.normal(0.0, sd)
+    p0 = 0.2
+    ll, g, g_sd, _ = kind_log_likelihood(e, q, sd, np.arange(12.0), p0, 0.0)
+    cov = np.diag(sd ** 2) + p0 ** 2 * np.outer(q, q)
+    sign, logdet = np.linalg.slogdet(cov)
+    expected = -0.5 * (e @ np.linalg.solve(cov, e) + logdet + len(e) * math.log(2 * math.pi))
+    assert sign > 0 and ll == pytest.approx(expected, rel=1e-9)
+    info = 1 / p0 ** 2 + np.sum(q * q / sd ** 2)
+    assert g == pytest.approx(np.sum(q * e / sd ** 2) / info, rel=1e-9)
+    assert g_sd == pytest.approx(info ** -0.5, rel=1e-9)
+    assert g == pytest.approx(0.05, abs=3 * g_sd)
+
+
+def test_drift_forgets():
+    """Closed form: a random walk widens the prior between updates by drift²·Δt (one update after a gap)."""
+    ll0, th0, sd0, _ = kind_log_likelihood([0.0, 1.0], [1.0, 1.0], [1.0, 1.0], [0.0, 4.0], 1.0, 0.0)
+    ll1, th1, sd1, _ = kind_log_likelihood([0.0, 1.0], [1.0, 1.0], [1.0, 1.0], [0.0, 4.0], 1.0, 0.5)
+    # after the first update P = 1/2; before the second P = 1/2 (+ 0.25·4 with drift)
+    assert th0 == pytest.approx(0.5 / 1.5) and th1 == pytest.approx(1.5 / 2.5)
+    assert sd1 ** 2 == pytest.approx(1.5 / 2.5)
+
+
+def test_missing_speed_samples():
+    """Closed form: every fifth sample of a 100 Hz sensor missing → 20 %; none missing → 0; samples received in
+    bursts → no expected count."""
+    c = SpeedCounter()
+    for i in range(100):
+        if i % 5:
+            c.add(i * 10_000_000)
+    got, expected = c.count(0, 1_000_000_000)
+    assert (got, expected) == (80, 100)
+    rec = WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6, got, expected)
+    assert missing_fraction([rec]) == pytest.approx(0.2)
+    assert missing_fraction([WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)]) == 0.0
+    burst = SpeedCounter()                      # 10 samples every 10 ms, 0.1 ms apart: no period to count against
+    for i in range(100):
+        burst.add((i // 10) * 10_000_000 + (i % 10) * 100_000)
+    assert burst.count(0, 100_000_000) == (100, 0)
+
+
+def test_bad_settings():
+    """Bad input: a setting outside its range names the field, the value and the range."""
+    with pytest.raises(InputError, match="diagnosis_prior_sd"):
+        DiagnosisSettings(prior_sd=-1.0)
+    with pytest.raises(InputError, match="diagnosis_horizon"):
+        DiagnosisSettings(horizon=0)
+    with pytest.raises(InputError, match="signatures"):
+        classify([WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)], [])
+
+
+@pytest.fixture(scope="module")
+def plant():
+    """The configured pump, a model to make faulty flows with, and the classifier's signatures."""
+    cfg = load_config()
+    return cfg, SteadySignatures(cfg)
+
+
+def _records(cfg, fault: dict, gain: float = 0.0, **kw):
+    return model_records(cfg, fault, gain, rel_sd=REL_SD, **kw)
+
+
+@pytest.mark.parametrize("kind", list(CASES))
+def test_names_the_fault(plant, kind):
+    """Behaviour: on the windows of a pump with one fault the classifier names that fault with probability
+    > 0.9 (healthy: no fault)."""
+    cfg, sig = plant
+    fault, gain = CASES[kind]
+    recs = _records(cfg, fault, gain)
+    d = classify(recs, [sig(r) for r in recs])
+    assert d.kind == kind, (d.kind, d.probability)
+    assert d.confidence > 0.9
+
+
+@pytest.mark.parametrize("restriction_pa", [0.0, 4e4])
+def test_suction_restriction(plant, restriction_pa):
+    """Behaviour: with a suction sensor, a suction pressure that falls with the flow (40 kPa at 68 L/min) names
+    suction_restriction; one that falls with the speed only (the suction line) names no fault."""
+    cfg, sig = plant
+    recs = _records(cfg, {}, restriction_pa=restriction_pa)
+    d = classify(recs, [sig(r) for r in recs])
+    assert d.kind == ("suction_restriction" if restriction_pa else "healthy"), d.probability
+    assert d.confidence > 0.9
+
+
+def test_one_operating_point_names_no_kind(plant):
+    """Behaviour: at one operating point every kind fits the one residual: a fault, kind "unknown", with the
+    probability of a fault; a healthy pump is still "healthy"."""
+    cfg, sig = plant
+    for fault, expected in (({"tip": 2.0}, "unknown"), ({}, "healthy")):
+        recs = _records(cfg, fault, points=((1000, 25),))
+        d = classify(recs, [sig(r) for r in recs])
+        assert d.kind == expected and d.confidence > 0.9, d.probability
+
+
+def test_unknown_when_nothing_fits(plant):
+    """Behaviour: a residual no candidate makes (flow gained at high pressure only, lost at low) is "unknown"."""
+    cfg, sig = plant
+    recs = _records(cfg, {})
+    odd = [WindowRecord(r.t_s, r.omega, r.p_delivery, r.p_suction, r.oil_k,
+                        r.q_meas + (0.05 if r.p_delivery > 1e6 else -0.05) * r.q_th * (1 if r.omega > 200 else -1),
+                        r.q_pred, r.q_th, r.sd) for r in recs]
+    d = classify(odd, [sig(r) for r in odd])
+    assert d.kind == "unknown", d.probability
+
+
+def test_speed_dropout(plant):
+    """Behaviour: flow residuals that fit "healthy" with a fifth of the speed samples missing name speed_dropout."""
+    cfg, sig = plant
+    recs = [WindowRecord(*[getattr(r, f) for f in ("t_s", "omega", "p_delivery", "p_suction", "oil_k", "q_meas",
+                                                   "q_pred", "q_th", "sd")], 40, 50) for r in _records(cfg, {})]
+    d = classify(recs, [sig(r) for r in recs])
+    assert d.kind == "speed_dropout" and d.dropout == pytest.approx(0.2)
+    assert KINDS[d.code] == "speed_dropout"
