@@ -284,8 +284,6 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     d = load_step(fx, fy)
     set_velocity(gc, fx, fy, mobility_kernel(ex, ey, fx, fy, omega2, bp),
                  mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
-    if pc.gear_constrained and h > 0.0:
-        set_constraint(ex, ey, theta + omega * h, h, km, gc)
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):

@@ -64,7 +64,7 @@ from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
-                            close_pending, gear_move, linearise, linearise_with)
+                            close_pending, gear_move, linearise, linearise_with, set_constraint)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
@@ -376,7 +376,8 @@ def _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc,
 
 
 @njit
-def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters, integrals, move):
+def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters, integrals, move,
+              constraint=None):
     """Advance ``n_steps`` output steps of h [s]; returns the new (θ, t), updates y, e in place.
 
     Writes one record per step into ``rec`` (N_REC columns), ``rec_p`` (chamber
@@ -388,6 +389,12 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     ``move``: MOVE_FIXED (the centre stays where it is), MOVE_MOBILITY (Heun
     steps of the mobility method, sec. 2.2 of [1]) or MOVE_EXTERNAL (held here,
     moved by the caller: :func:`integrate_external`).
+    ``constraint``: None, or ``ws.gear`` with ``numerics.gear_coupling: constrained`` (the tooth contact as a
+    constraint inside the step: :func:`.gear_coupling.set_constraint` after each linearisation, the pull-back
+    along G n after each step).  Its type, not a flag, selects the path: numba prunes the ``is not None``
+    branches, so the other schemes compile without that code (compiled in behind a run-time flag it cost them
+    2–12 % of speed with the same sub-steps, docs/performance.md) and ``constrained`` is a specialisation of
+    its own, compiled on first use.
     """
     pc = km.pc
     # the gear inside the stages (numerics.gear_coupling: model/gear_coupling.py); MOVE_EXTERNAL: set up by
@@ -400,6 +407,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     elif move == MOVE_MOBILITY:
         to_pressures(y, km, ws.pres)
         linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        if constraint is not None and h > 0.0:
+            set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear)
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
@@ -434,7 +443,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         elif move == MOVE_FIXED:
             fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)
         ex0, ey0 = ex, ey
-        if coupled and pc.gear_constrained:        # back onto the teeth along G n, as inside the step
+        if constraint is not None and coupled:        # back onto the teeth along G n, as inside the step
             ex, ey, _ok = pull_back_along(ws.cmat, pc.tip_clearance, ex, ey, ws.gear[GC_GXX], ws.gear[GC_GXY],
                                           ws.gear[GC_GYX], ws.gear[GC_GYY], ws.gear[GC_PAIR:GC_PAIR + 10])
         ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, True)
@@ -443,6 +452,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             counters[C_GEAR_CONTACT] += 1
         if coupled and move == MOVE_MOBILITY:
             linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
+            if constraint is not None and h > 0.0:
+                set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear)
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
@@ -498,7 +509,8 @@ def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, w
         to_pressures(y, km, ws.pres)
         linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
-                             rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL)
+                             rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL,
+                             ws.gear if km.pc.gear_constrained else None)
         if counters[C_ABANDONED] != abandoned:
             break
     return theta, t

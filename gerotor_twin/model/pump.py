@@ -229,8 +229,10 @@ class PumpModel:
                     theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec,
                                                     rec_p, rec_peak, rec_g, counters, vols)
             else:
-                theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
-                                       counters, vols, self._move)
+                constrained = self.kernel.pc.gear_constrained
+                with self._first_use() if constrained else contextlib.nullcontext():
+                    theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
+                                           counters, vols, self._move, ws.gear if constrained else None)
             K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel.eos)
         if counters[K.C_ABANDONED] != state.counters[K.C_ABANDONED]:
             why = _ABANDONED.get(int(ws.ctrl[K.CT_STATUS]), "unknown status").format(
@@ -252,13 +254,18 @@ class PumpModel:
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
     def _first_use(self):
-        """Around the first advance of a Method 1 / FDM model: one line if its kernels compile now (they are
-        not built at install, :data:`gerotor_twin.precompile.DEFAULT_MODELS`); later advances: nothing."""
+        """Around the first advance of a Method 1 / FDM model or of ``gear_coupling: constrained``: one line if
+        its kernels compile now (they are not built at install, :data:`gerotor_twin.precompile.DEFAULT_MODELS`);
+        later advances: nothing."""
         if self._announced:
             return contextlib.nullcontext()
         self._announced = True
-        return announce_compilation(f"gerotor_twin: compiling the {self.bearing_name} gear model on its first use "
-                                    "(once: seconds to half a minute; cached after) ...")
+        if self.kernel.pc.gear_constrained and self._move != K.MOVE_EXTERNAL:
+            what, how_long = "the stepper with numerics.gear_coupling: constrained", "about as long as make setup's"
+        else:
+            what, how_long = f"the {self.bearing_name} gear model", "seconds to half a minute"
+        return announce_compilation(f"gerotor_twin: compiling {what} on its first use (once: {how_long}; "
+                                    "cached after) ...")
 
     def gaps(self, theta: float, e) -> tuple[np.ndarray, float, int]:
         """Tooth-tip gaps [m] at shaft angle θ [rad] for an outer-gear displacement e [m] (sec. 3.7 rule).
