@@ -14,7 +14,8 @@ from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
                                          classify, kind_log_likelihood, missing_fraction)
-from gerotor_twin.offline.diagnosis_bench import MODEL_CASES as CASES, POINTS, model_records
+from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
+                                                 model_records)
 
 REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
 
@@ -138,3 +139,29 @@ def test_speed_dropout(plant):
     d = classify(recs, [sig(r) for r in recs])
     assert d.kind == "speed_dropout" and d.dropout == pytest.approx(0.2)
     assert KINDS[d.code] == "speed_dropout"
+
+
+def test_bench_loss_crossing_interpolates():
+    """Closed form: the 2-pt crossing of the bench is the linear interpolation between the truth's samples, by
+    magnitude (an apparent gain crosses too), the first sample when already there, None when never."""
+    t = [0.0, 0.1, 0.2, 0.3]
+    assert crossing_time(t, [0.0, 0.01, 0.03, 0.05]) == pytest.approx(0.15)
+    assert crossing_time(t, [0.0, -0.01, -0.03, -0.05]) == pytest.approx(0.15)
+    assert crossing_time(t, [0.02, 0.03, 0.04, 0.05]) == 0.0
+    assert crossing_time(t, [0.0, 0.005, 0.01, 0.019]) is None
+
+
+def test_bench_counts_alarms_not_bags():
+    """Closed form: the bench's fraction is over alarms (two right of three in two tip-wear bags), the other
+    alarms by the kind they named, a fault bag whose loss crossed 2 pt without an alarm naming it counted as
+    missed, and the healthy bags' alarms kept apart from the fault bags' total."""
+    def bag(kind, named, crossing, first):
+        return {"kind": kind, "alarms": [{"fault": n} for n in named], "crossing_s": crossing,
+                "first_right_s": first, "delay_s": None if crossing is None or first is None else first - crossing}
+    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0), bag("tip_wear", ["tip_wear"], 2.0, 5.0),
+                       bag("air_ingress", [], 2.5, None), bag("healthy", ["lateral_wear"], None, None)])
+    assert (s["tip_wear"]["alarms"], s["tip_wear"]["right"]) == (3, 2)
+    assert s["tip_wear"]["fraction"] == pytest.approx(2 / 3) and s["tip_wear"]["wrong_named"] == {"unknown": 1}
+    assert s["tip_wear"]["delay_s"] == [1.0, 3.0] and s["air_ingress"]["missed"] == 1
+    assert s["air_ingress"]["fraction"] is None and s["healthy"]["alarms"] == 1
+    assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"]) == (3, 3, 2)
