@@ -39,6 +39,31 @@ def test_likelihood_closed_form():
     assert g == pytest.approx(0.05, abs=3 * g_sd)
 
 
+def test_trend_likelihood_closed_form():
+    """Closed form: with zero drift and a growth rate r ~ N(0, R0²) the Kalman likelihood is the marginal
+    likelihood log N(e; 0, diag σ² + P0·d dᵀ + R0²·(d∘τ)(d∘τ)ᵀ), τ the time since the first window, and the
+    final θ the posterior mean of θ0 + r·τ_n; a ramp of the fault fits far better than with r fixed at 0."""
+    rng = np.random.default_rng(2)
+    n = 16
+    d = rng.uniform(1e-4, 1e-3, n)
+    t = 0.5 * np.arange(n) + 3.0
+    sd = 0.003 * d
+    e = d * 0.01 * (t - t[0]) + rng.normal(0.0, sd)           # θ grows by 0.01 per second
+    p0, r0 = 0.2, 0.2 / (t[-1] - t[0])
+    ll, th, th_sd, _ = kind_log_likelihood(e, d, sd, t, p0, 0.0, r0)
+    x = np.column_stack([d, d * (t - t[0])])
+    cov = np.diag(sd ** 2) + x @ np.diag([p0 ** 2, r0 ** 2]) @ x.T
+    expected = -0.5 * (e @ np.linalg.solve(cov, e) + np.linalg.slogdet(cov)[1] + n * math.log(2 * math.pi))
+    assert ll == pytest.approx(expected, rel=1e-9)
+    info = np.diag([p0 ** -2, r0 ** -2]) + x.T @ np.diag(sd ** -2) @ x
+    post = np.linalg.solve(info, x.T @ (e / sd ** 2))
+    last = np.array([1.0, t[-1] - t[0]])
+    assert th == pytest.approx(last @ post, rel=1e-7)
+    assert th_sd == pytest.approx(math.sqrt(last @ np.linalg.solve(info, last)), rel=1e-7)
+    assert th == pytest.approx(0.01 * (t[-1] - t[0]), abs=3 * th_sd)
+    assert ll > kind_log_likelihood(e, d, sd, t, p0, 0.0)[0] + 20.0
+
+
 def test_drift_forgets():
     """Closed form: a random walk widens the prior between updates by drift²·Δt (one update after a gap)."""
     ll0, th0, sd0, _ = kind_log_likelihood([0.0, 1.0], [1.0, 1.0], [1.0, 1.0], [0.0, 4.0], 1.0, 0.0)
@@ -72,6 +97,8 @@ def test_bad_settings():
         DiagnosisSettings(prior_sd=-1.0)
     with pytest.raises(InputError, match="diagnosis_horizon"):
         DiagnosisSettings(horizon=0)
+    with pytest.raises(InputError, match="diagnosis_trend = 'yes'"):
+        DiagnosisSettings(trend="yes")
     with pytest.raises(InputError, match="signatures"):
         classify([WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)], [])
 
