@@ -33,6 +33,7 @@ import numpy as np
 
 from ..cli import main as cli_main
 from ..errors import InputError, check_range
+from ..resources import resource_path
 from ..twin.diagnosis import KINDS, WindowRecord
 from ..twin.health import LEVELS, alarm_records, fault_name
 from .health_log import load_health
@@ -100,14 +101,9 @@ def model_windows_table() -> str:
     return "\n".join(lines)
 
 
-#: four plateaus of 2.5 s at 50 °C: two speeds × two delivery pressures [rpm, bar]
-PROFILE = """name: diagnosis
-segments:
-  - {duration_s: 2.5, rpm: 1000, bar: 5, oil_temperature_c: 50}
-  - {duration_s: 2.5, rpm: 1000, bar: 25}
-  - {duration_s: 2.5, rpm: 2500, bar: 25}
-  - {duration_s: 2.5, rpm: 2500, bar: 5}
-"""
+#: the bags' profile: four plateaus of 2.5 s at 50 °C, two speeds × two delivery pressures (1000 / 2500 rpm ×
+#: 5 / 25 bar, the operating points of :data:`POINTS`)
+PROFILE = resource_path("config", "profiles", "diagnosis.yaml")
 #: length of :data:`PROFILE` [s]
 PROFILE_S = 10.0
 #: loss of volumetric efficiency at the monitor's reference point from which the detection delay counts [-]
@@ -214,7 +210,7 @@ def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float = PROFILE_S
     tag = f"{kind}_{to}_{seed}"
     bag, twin = out / f"{tag}.mcap", out / f"{tag}_twin.mcap"
     fault = [] if to is None else ["--fault", kind, "--fault-to", f"{to:g}", "--fault-ramp", f"{ramp_s:g}"]
-    argv = ["synth-bench", "--profile-file", str(out / "profile.yaml"), "--clearance-factor", "1.0", "--seed",
+    argv = ["synth-bench", "--profile-file", str(PROFILE), "--clearance-factor", "1.0", "--seed",
             str(seed), "-o", str(bag), "--overwrite", "--quiet", *fault]
     if cli_main(argv) or cli_main(["run-bag", str(bag), "-o", str(twin), "--overwrite", "--quiet",
                                    "--health", "window_s=0.5", "--health", "settle_s=0.5"]):
@@ -300,7 +296,6 @@ def run_bags(out: Path, cases, ramp_s: float) -> list[dict]:
     from ..config import load_config
     cfg = load_config()
     out.mkdir(parents=True, exist_ok=True)
-    (out / "profile.yaml").write_text(PROFILE)
     results, t0 = [], time.time()
     for i, (kind, to, seed) in enumerate(cases, 1):
         r = run_case(cfg, kind, to, seed, out, ramp_s)
