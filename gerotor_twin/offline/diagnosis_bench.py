@@ -238,7 +238,8 @@ def _span(values, fmt: str = "{:.1f}") -> str:
     v = sorted(x for x in values if x is not None)
     if not v:
         return "–"
-    return fmt.format(v[0]) if len(v) == 1 else f"{fmt.format(v[0])} … {fmt.format(v[-1])}"
+    lo, hi = fmt.format(v[0]), fmt.format(v[-1])
+    return lo if lo == hi else f"{lo} … {hi}"
 
 
 def alarm_summary(results) -> dict:
@@ -269,7 +270,7 @@ def alarm_table(summary: dict) -> str:
         crossed = [c for c in s["crossing_s"] if c is not None]
         cross = "never" if kind != "all" and not crossed and kind != "healthy" else _span(crossed)
         delay = _span(s["delay_s"], "{:+.1f}")
-        if delay != "–" and len([d for d in s["delay_s"] if d is not None]) > 2:
+        if "…" in delay and len([d for d in s["delay_s"] if d is not None]) > 2:
             delay += f" (median {float(np.median([d for d in s['delay_s'] if d is not None])):+.1f})"
         lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {other} | {cross} | {delay} | {s['missed']} |")
     return "\n".join(lines)
