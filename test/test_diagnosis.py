@@ -15,7 +15,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
                                          classify, kind_log_likelihood, missing_fraction)
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
-                                                 model_records)
+                                                 main as bench_main, model_records)
 
 REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
 
@@ -192,3 +192,16 @@ def test_bench_counts_alarms_not_bags():
     assert s["tip_wear"]["delay_s"] == [1.0, 3.0] and s["air_ingress"]["missed"] == 1
     assert s["air_ingress"]["fraction"] is None and s["healthy"]["alarms"] == 1
     assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"]) == (3, 3, 2)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--severity", "mid"], "--severity = 'mid' is invalid; allowed: high | low | both"),
+    (["--seeds", "1,x"], "--seeds = '1,x' is invalid; allowed: comma-separated"),
+    (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s")])
+def test_bench_bad_input(tmp_path, capsys, argv, message):
+    """Bad input: the bench refuses a bad option in one line naming it, the value and the allowed range (exit 2)
+    before any bag is made."""
+    with pytest.raises(SystemExit) as exc:
+        bench_main(["-o", str(tmp_path / "b"), *argv])
+    assert exc.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()

@@ -26,6 +26,7 @@ import argparse
 import collections
 import json
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from ..twin.diagnosis import KINDS, WindowRecord
 from ..twin.health import LEVELS, alarm_records, fault_name
 from .health_log import load_health
 
-__all__ = ["PROFILE", "PROFILE_S", "LOSS_PT", "CASES", "reference_loss", "crossing_time", "truth_crossing",
+__all__ = ["PROFILE", "profile_s", "LOSS_PT", "CASES", "reference_loss", "crossing_time", "truth_crossing",
            "first_named_alarm", "run_case", "confusion", "alarm_summary", "alarm_table", "main", "model_records",
            "MODEL_CASES", "POINTS"]
 
@@ -104,8 +105,6 @@ def model_windows_table() -> str:
 #: the bags' profile: four plateaus of 2.5 s at 50 °C, two speeds × two delivery pressures (1000 / 2500 rpm ×
 #: 5 / 25 bar, the operating points of :data:`POINTS`)
 PROFILE = resource_path("config", "profiles", "diagnosis.yaml")
-#: length of :data:`PROFILE` [s]
-PROFILE_S = 10.0
 #: loss of volumetric efficiency at the monitor's reference point from which the detection delay counts [-]
 LOSS_PT = 0.02
 
@@ -115,6 +114,12 @@ LOSS_PT = 0.02
 CASES = {"healthy": (None, None), "tip_wear": (2.0, 2.5), "lateral_wear": (1.05, 1.1),
          "air_ingress": (0.05, 0.08), "pressure_offset": (-3e5, -5e5), "flowmeter_drift": (-0.05, -0.1),
          "speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
+
+
+def profile_s() -> float:
+    """Length of :data:`PROFILE` [s] (the default ramp: a fault reaches its severity at the bag's end)."""
+    from ..bench_emulator.profile_file import load_profile_file
+    return load_profile_file(PROFILE).duration_s
 
 
 def reference_loss(cfg, kind: str, values, settings=None) -> np.ndarray:
@@ -195,7 +200,7 @@ def first_named_alarm(t, rows, kind: str) -> float | None:
                  and fault_name(r) == kind), None)
 
 
-def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float = PROFILE_S) -> dict:
+def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float) -> dict:
     """One bag of ``kind`` reaching severity ``to`` [the kind's unit] over ``ramp_s`` [s] from the start, noise
     ``seed``, and the twin over it.
 
@@ -314,9 +319,9 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--out", default="diagnosis_bench", help="directory for the bags and results.json")
     p.add_argument("--seeds", default="1", help="noise seeds, comma-separated (default 1)")
     p.add_argument("--severity", default="high", help="high | low | both severities of each kind (default high)")
-    p.add_argument("--ramp", type=float, default=PROFILE_S,
-                   help=f"seconds from the start until a fault reaches its severity (default {PROFILE_S:g}, the bag's "
-                        "length; 0: a step)")
+    p.add_argument("--ramp", type=float, default=None,
+                   help="seconds from the start until a fault reaches its severity (default: the bag's length, 10 s; "
+                        "0: a step)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
     args = p.parse_args(argv)
@@ -324,14 +329,14 @@ def main(argv=None) -> int:
         print(model_windows_table())
         return 0
     try:
-        check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
+        ramp_s = profile_s() if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
         cases = _cases(args.seeds, args.severity)
     except InputError as e:
         p.error(str(e))
     t0, out = time.time(), Path(args.out)
-    results = run_bags(out, cases, args.ramp)
+    results = run_bags(out, cases, ramp_s)
     summary = alarm_summary(results)
-    (out / "results.json").write_text(json.dumps({"argv": list(argv) if argv is not None else None,
+    (out / "results.json").write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
                                                   "results": results, "summary": summary}, indent=1))
     print(confusion(results), "", alarm_table(summary), sep="\n")
     print(f"{len(results)} bags in {time.time() - t0:.0f} s; wrote {out / 'results.json'}")
