@@ -14,7 +14,8 @@ from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
                                          classify, kind_log_likelihood, missing_fraction)
-from gerotor_twin.offline.diagnosis_bench import MODEL_CASES as CASES, POINTS, model_records
+from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
+                                                 main as bench_main, model_records)
 
 REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
 
@@ -36,6 +37,31 @@ def test_likelihood_closed_form():
     assert g == pytest.approx(np.sum(q * e / sd ** 2) / info, rel=1e-9)
     assert g_sd == pytest.approx(info ** -0.5, rel=1e-9)
     assert g == pytest.approx(0.05, abs=3 * g_sd)
+
+
+def test_trend_likelihood_closed_form():
+    """Closed form: with zero drift and a growth rate r ~ N(0, R0²) the Kalman likelihood is the marginal
+    likelihood log N(e; 0, diag σ² + P0·d dᵀ + R0²·(d∘τ)(d∘τ)ᵀ), τ the time since the first window, and the
+    final θ the posterior mean of θ0 + r·τ_n; a ramp of the fault fits far better than with r fixed at 0."""
+    rng = np.random.default_rng(2)
+    n = 16
+    d = rng.uniform(1e-4, 1e-3, n)
+    t = 0.5 * np.arange(n) + 3.0
+    sd = 0.003 * d
+    e = d * 0.01 * (t - t[0]) + rng.normal(0.0, sd)           # θ grows by 0.01 per second
+    p0, r0 = 0.2, 0.2 / (t[-1] - t[0])
+    ll, th, th_sd, _ = kind_log_likelihood(e, d, sd, t, p0, 0.0, r0)
+    x = np.column_stack([d, d * (t - t[0])])
+    cov = np.diag(sd ** 2) + x @ np.diag([p0 ** 2, r0 ** 2]) @ x.T
+    expected = -0.5 * (e @ np.linalg.solve(cov, e) + np.linalg.slogdet(cov)[1] + n * math.log(2 * math.pi))
+    assert ll == pytest.approx(expected, rel=1e-9)
+    info = np.diag([p0 ** -2, r0 ** -2]) + x.T @ np.diag(sd ** -2) @ x
+    post = np.linalg.solve(info, x.T @ (e / sd ** 2))
+    last = np.array([1.0, t[-1] - t[0]])
+    assert th == pytest.approx(last @ post, rel=1e-7)
+    assert th_sd == pytest.approx(math.sqrt(last @ np.linalg.solve(info, last)), rel=1e-7)
+    assert th == pytest.approx(0.01 * (t[-1] - t[0]), abs=3 * th_sd)
+    assert ll > kind_log_likelihood(e, d, sd, t, p0, 0.0)[0] + 20.0
 
 
 def test_drift_forgets():
@@ -71,6 +97,8 @@ def test_bad_settings():
         DiagnosisSettings(prior_sd=-1.0)
     with pytest.raises(InputError, match="diagnosis_horizon"):
         DiagnosisSettings(horizon=0)
+    with pytest.raises(InputError, match="diagnosis_trend = 'yes'"):
+        DiagnosisSettings(trend="yes")
     with pytest.raises(InputError, match="signatures"):
         classify([WindowRecord(1.0, 100.0, 2e6, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)], [])
 
@@ -138,3 +166,42 @@ def test_speed_dropout(plant):
     d = classify(recs, [sig(r) for r in recs])
     assert d.kind == "speed_dropout" and d.dropout == pytest.approx(0.2)
     assert KINDS[d.code] == "speed_dropout"
+
+
+def test_bench_loss_crossing_interpolates():
+    """Closed form: the 2-pt crossing of the bench is the linear interpolation between the truth's samples, by
+    magnitude (an apparent gain crosses too), the first sample when already there, None when never."""
+    t = [0.0, 0.1, 0.2, 0.3]
+    assert crossing_time(t, [0.0, 0.01, 0.03, 0.05]) == pytest.approx(0.15)
+    assert crossing_time(t, [0.0, -0.01, -0.03, -0.05]) == pytest.approx(0.15)
+    assert crossing_time(t, [0.02, 0.03, 0.04, 0.05]) == 0.0
+    assert crossing_time(t, [0.0, 0.005, 0.01, 0.019]) is None
+
+
+def test_bench_counts_alarms_not_bags():
+    """Closed form: the bench's fraction is over alarms (two right of three in two tip-wear bags), the other
+    alarms by the kind they named, a fault bag whose loss crossed 2 pt without an alarm naming it counted as
+    missed, and the healthy bags' alarms kept apart from the fault bags' total."""
+    def bag(kind, named, crossing, first):
+        return {"kind": kind, "alarms": [{"fault": n} for n in named], "crossing_s": crossing,
+                "first_right_s": first, "delay_s": None if crossing is None or first is None else first - crossing}
+    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0), bag("tip_wear", ["tip_wear"], 2.0, 5.0),
+                       bag("air_ingress", [], 2.5, None), bag("healthy", ["lateral_wear"], None, None)])
+    assert (s["tip_wear"]["alarms"], s["tip_wear"]["right"]) == (3, 2)
+    assert s["tip_wear"]["fraction"] == pytest.approx(2 / 3) and s["tip_wear"]["wrong_named"] == {"unknown": 1}
+    assert s["tip_wear"]["delay_s"] == [1.0, 3.0] and s["air_ingress"]["missed"] == 1
+    assert s["air_ingress"]["fraction"] is None and s["healthy"]["alarms"] == 1
+    assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"]) == (3, 3, 2)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--severity", "mid"], "--severity = 'mid' is invalid; allowed: high | low | both"),
+    (["--seeds", "1,x"], "--seeds = '1,x' is invalid; allowed: comma-separated"),
+    (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s")])
+def test_bench_bad_input(tmp_path, capsys, argv, message):
+    """Bad input: the bench refuses a bad option in one line naming it, the value and the allowed range (exit 2)
+    before any bag is made."""
+    with pytest.raises(SystemExit) as exc:
+        bench_main(["-o", str(tmp_path / "b"), *argv])
+    assert exc.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()

@@ -209,12 +209,15 @@ def test_run_bag_bad_health_setting(tmp_path, capsys, item):
 
 def test_report_shows_health_and_alarms(wear_run, tmp_path, monkeypatch):
     """Behaviour: the report of the wear run has the two health plots; the efficiency plot carries the
-    estimate with its ±2σ band and the WARN and ERROR intervals the monitor logged, in that order."""
+    estimate with its ±2σ band and the WARN and ERROR intervals the monitor logged, in that order, each
+    labelled with the fault named; beside them the fault timeline lists those alarms with the fault and
+    probability the health log's alarm records name."""
     from gerotor_twin.offline.health_log import alarm_intervals, load_health
     from gerotor_twin.report import build
     from gerotor_twin.report.acceptance import AcceptanceCriterion
     from gerotor_twin.report.build import build_report, make_context
-    from gerotor_twin.report.health_panels import ts_health_efficiency, ts_health_leakage
+    from gerotor_twin.report.health_panels import fault_timeline, ts_health_efficiency, ts_health_leakage
+    from gerotor_twin.twin.health import alarm_records, fault_text
     loaded = []                          # the recordings as the report read them (read once: the twin log is long)
 
     def load(*args):
@@ -230,9 +233,16 @@ def test_report_shows_health_and_alarms(wear_run, tmp_path, monkeypatch):
     assert len(loaded) == 1
     ctx = make_context(*loaded[0], AcceptanceCriterion(), "wear")
     eff, leak = ts_health_efficiency(ctx), ts_health_leakage(ctx)
-    assert [iv.label for iv in eff.intervals] == ["WARN", "ERROR"] == [iv.label for iv in leak.intervals]
     t, rows = load_health(wear_run)
-    logged = alarm_intervals(t, rows)
+    logged, records = alarm_intervals(t, rows), alarm_records(t, rows)
+    assert [r["fault"] for r in records] and all(r["fault"] in ("tip_wear", "lateral_wear") for r in records)
+    labels = [f"{r['level']}: {fault_text(r['fault'], r['confidence'])}" for r in records]
+    assert [iv.label for iv in eff.intervals] == labels == [iv.label for iv in leak.intervals]
+    assert [r["level"] for r in records] == ["WARN", "ERROR"]
+    timeline = fault_timeline(ctx)
+    assert "id='tab-fault-timeline'" in page and timeline.heading == eff.heading
+    assert [(r[0], r[3]) for r in timeline.rows] == [(r["level"], r["fault"]) for r in records]
+    assert [r[4] for r in timeline.rows] == pytest.approx([r["confidence"] for r in records])
     assert [iv.t0 for iv in eff.intervals] == pytest.approx([a[1] for a in logged], abs=0.1)     # health_log counts from the first flow input
     est, band = eff.traces[0], eff.bands[0]
     assert np.all(band.lo <= est.y) and np.all(est.y <= band.hi) and np.any(band.hi > band.lo)

@@ -1,10 +1,20 @@
-"""Confusion table of the fault classifier over emulated fault bags (a measurement, not a test).
+"""Fault classifier over emulated fault bags: per bag, per alarm and the detection delays (a measurement, not a test).
 
-``python -m gerotor_twin.offline.diagnosis_bench [-o DIR] [--seeds 1,2]`` makes one short bag per fault
-kind, seed and severity with ``synth-bench`` (emulated pump at clearance factor 1.0 against the twin's
-``config/pump.yaml``, the fault a step from the start), runs the twin over it (``run-bag``, health windows
-of 0.5 s after 0.5 s of settling) and tabulates the fault the classifier names at the last health update
-against the true kind (docs/calibration_health.md, "Fault diagnosis").
+``python -m gerotor_twin.offline.diagnosis_bench [-o DIR] [--seeds 1,2] [--severity high|low|both] [--ramp S]``
+makes one short bag per fault kind, seed and severity with ``synth-bench`` (each kind alone; emulated pump
+at clearance factor 1.0 against the twin's ``config/pump.yaml``; the fault ramps linearly from none at the
+start to its severity at ``--ramp`` s, default the bag's length, 0: a step), runs the twin over it
+(``run-bag``, health windows of 0.5 s after 0.5 s of settling) and reports, with a line per bag as it goes:
+
+* per bag, the fault named at the last health update against the true kind (a confusion table);
+* per alarm (``alarm_records``: each WARN / ERROR interval, named at its last update), the fraction naming
+  the true kind, per kind and over all fault bags, and the alarms on healthy bags;
+* per kind, the detection delay: from the time the fault's apparent loss of volumetric efficiency at the
+  health monitor's reference point reaches 2 pt (:func:`truth_crossing`, from the bag's ``fault_series``
+  truth) to the first health update at WARN / ERROR naming the true kind.
+
+It writes ``results.json`` (every bag and the summary) in the output directory (docs/calibration_health.md,
+"Fault diagnosis").
 
 ``--model-windows`` instead classifies windows made by the twin's own steady model with each fault in
 full (:func:`model_records`, the behaviour tests' windows) on sets of operating points: what one speed or
@@ -16,17 +26,22 @@ import argparse
 import collections
 import json
 import math
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 from ..cli import main as cli_main
+from ..errors import InputError, check_range
+from ..resources import resource_path
 from ..twin.diagnosis import KINDS, WindowRecord
-from ..twin.health import fault_name
+from ..twin.health import LEVELS, alarm_records, fault_name
 from .health_log import load_health
 
-__all__ = ["PROFILE", "CASES", "run_case", "confusion", "main", "model_records", "MODEL_CASES", "POINTS"]
+__all__ = ["PROFILE", "profile_s", "LOSS_PT", "CASES", "reference_loss", "crossing_time", "truth_crossing",
+           "first_named_alarm", "run_case", "confusion", "alarm_summary", "alarm_table", "main", "model_records",
+           "MODEL_CASES", "POINTS"]
 
 P_ATM = 101325.0                   #: [Pa]
 OIL_K = 323.15                     #: [K]
@@ -36,21 +51,6 @@ POINTS = ((1000, 5), (1000, 25), (2500, 25), (2500, 5))
 MODEL_CASES = {"healthy": ({}, 0.0), "tip_wear": ({"tip": 2.0}, 0.0), "lateral_wear": ({"lateral": 1.15}, 0.0),
                "air_ingress": ({"air_fraction": 0.03}, 0.0), "pressure_offset": ({"offset_pa": 1e5}, 0.0),
                "flowmeter_drift": ({}, 0.05)}
-
-#: four plateaus of 2.5 s at 50 °C: two speeds × two delivery pressures [rpm, bar]
-PROFILE = """name: diagnosis
-segments:
-  - {duration_s: 2.5, rpm: 1000, bar: 5, oil_temperature_c: 50}
-  - {duration_s: 2.5, rpm: 1000, bar: 25}
-  - {duration_s: 2.5, rpm: 2500, bar: 25}
-  - {duration_s: 2.5, rpm: 2500, bar: 5}
-"""
-
-#: true kind → two severities (``--fault-to``; healthy: none)
-CASES = {"healthy": (None, None), "tip_wear": (1.5, 2.0), "lateral_wear": (1.1, 1.3),
-         "air_ingress": (0.01, 0.03), "pressure_offset": (5e4, 1e5), "flowmeter_drift": (0.02, 0.05),
-         "speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
-
 
 def _flow(cfg, rpm, bar, p_suction=P_ATM, **fault):
     from ..model.clearance_scale import scaled_config
@@ -102,53 +102,244 @@ def model_windows_table() -> str:
     return "\n".join(lines)
 
 
-def run_case(kind: str, to, seed: int, out: Path) -> tuple[str, float]:
-    """One bag of ``kind`` at severity ``to`` [the kind's unit] and ``seed``; the named fault and its
-    probability [-] at the last health update."""
-    bag, twin = out / f"{kind}_{to}_{seed}.mcap", out / f"{kind}_{to}_{seed}_twin.mcap"
-    fault = [] if to is None else ["--fault", kind, "--fault-to", f"{to:g}", "--fault-ramp", "0"]
-    argv = ["synth-bench", "--profile-file", str(out / "profile.yaml"), "--clearance-factor", "1.0", "--seed",
+#: the bags' profile: four plateaus of 2.5 s at 50 °C, two speeds × two delivery pressures (1000 / 2500 rpm ×
+#: 5 / 25 bar, the operating points of :data:`POINTS`)
+PROFILE = resource_path("config", "profiles", "diagnosis.yaml")
+#: loss of volumetric efficiency at the monitor's reference point from which the detection delay counts [-]
+LOSS_PT = 0.02
+
+#: true kind → (low, high) severity (``--fault-to``; healthy: none), reached at the end of the ramp: at the
+#: reference point (1500 rpm, 20 bar, 50 °C) the apparent loss at full severity is 4–10 pt for the flow kinds
+#: (:func:`reference_loss`); a suction restriction and a speed dropout leave the measured flow as predicted
+CASES = {"healthy": (None, None), "tip_wear": (2.0, 2.5), "lateral_wear": (1.05, 1.1),
+         "air_ingress": (0.05, 0.08), "pressure_offset": (-3e5, -5e5), "flowmeter_drift": (-0.05, -0.1),
+         "speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
+
+
+def profile_s() -> float:
+    """Length of :data:`PROFILE` [s] (the default ramp: a fault reaches its severity at the bag's end)."""
+    from ..bench_emulator.profile_file import load_profile_file
+    return load_profile_file(PROFILE).duration_s
+
+
+def reference_loss(cfg, kind: str, values, settings=None) -> np.ndarray:
+    """Apparent loss of volumetric efficiency [-] at the health monitor's reference point for each fault value.
+
+    Δη = η_v the twin predicts − η_v the bench's flow meter shows, both at the reference speed, delivery
+    pressure and oil temperature of ``settings`` (:class:`~gerotor_twin.twin.health.HealthSettings`) for
+    the pump ``cfg`` (the emulated pump of the bags, at clearance factor 1.0): wear and air ingress by the
+    pump's steady state with the clearance factor or free-air fraction ``v``; a flow-meter gain g: −g·η_v; a
+    pressure offset δp: η_v(p + δp) − η_v(p) (the twin runs at the pressure read); a suction restriction v
+    [Pa at rated flow]: η_v(p_s) − η_v(p_s − v·(Q/Q_rated)²) (a true loss the twin predicts from the
+    measured suction pressure); a speed dropout: 0.  Positive: the pump looks worse than the twin predicts.
+
+    Parameters
+    ----------
+    cfg : PumpConfig
+    kind : str
+        A kind of :data:`CASES` other than ``healthy``.
+    values : sequence of float
+        Fault values (the kind's unit, :data:`~gerotor_twin.bench_emulator.faults.FAULT_KINDS`).
+    """
+    from ..model.clearance_scale import scaled_config
+    from ..model.pump import PumpModel
+    from ..model.steady import run_steady
+    from ..twin.health import HealthSettings
+    s = settings or HealthSettings()
+    rpm, oil = min(s.reference_rpm, cfg.range.max_speed_rpm), s.reference_oil_c + 273.15
+    p_s = cfg.boundary.suction_pressure_pa
+
+    def eta(c=cfg, bar=s.reference_bar, ps=p_s):
+        r = run_steady(PumpModel(c), rpm, bar, p_suction=ps, oil_temperature=oil)
+        return r.mean_delivery_flow_m3s / r.theoretical_flow_m3s
+
+    e0, q_share = eta(), rpm / cfg.range.max_speed_rpm
+    per_value = {"tip_wear": lambda v: e0 - eta(scaled_config(cfg, tip=v)),
+                 "lateral_wear": lambda v: e0 - eta(scaled_config(cfg, lateral=v)),
+                 "air_ingress": lambda v: e0 - eta(scaled_config(cfg, air_fraction=v)),
+                 "pressure_offset": lambda v: eta(bar=s.reference_bar + v / 1e5) - e0,
+                 "flowmeter_drift": lambda v: -v * e0,
+                 "suction_restriction": lambda v: e0 - eta(ps=p_s - v * (q_share * e0) ** 2),
+                 "speed_dropout": lambda v: 0.0}
+    if kind not in per_value:
+        raise InputError("kind", kind, " | ".join(per_value))
+    return np.array([per_value[kind](float(v)) for v in values])
+
+
+def crossing_time(t_s, loss, threshold: float = LOSS_PT) -> float | None:
+    """First time [s] the apparent loss ``loss`` [-] (samples at ``t_s`` [s]) reaches ``threshold`` [-] in
+    magnitude, linearly interpolated between the samples; None when it never does."""
+    t, a = np.asarray(t_s, float), np.abs(np.asarray(loss, float))
+    i = int(np.argmax(a >= threshold))
+    if a[i] < threshold:
+        return None
+    if i == 0:
+        return float(t[0])
+    return float(t[i - 1] + (threshold - a[i - 1]) / (a[i] - a[i - 1]) * (t[i] - t[i - 1]))
+
+
+def truth_crossing(cfg, bag: Path, kind: str, grid: int = 11) -> tuple[float | None, float]:
+    """When the bag's fault (its ``fault_series`` metadata, every 0.1 s) makes the apparent loss at the
+    reference point reach :data:`LOSS_PT` [s] (None: never), and that loss at the end of the run [-].
+    The loss is computed on ``grid`` values from the first to the last of the series and interpolated
+    linearly in the fault's value (:func:`reference_loss`)."""
+    from ..bench_emulator.emulator import EMULATOR_METADATA
+    from ..io.reader import metadata
+    series = json.loads(metadata(bag)[EMULATOR_METADATA]["fault_series"])
+    v = np.asarray(series[kind], float)
+    lo, hi = float(v.min()), float(v.max())
+    grid_v = np.linspace(lo, hi, grid) if hi > lo else np.array([lo])
+    grid_loss = reference_loss(cfg, kind, grid_v)
+    loss = np.interp(v, grid_v, grid_loss) if hi > lo else np.full_like(v, grid_loss[0])
+    return crossing_time(series["t_s"], loss), float(loss[-1])
+
+
+def first_named_alarm(t, rows, kind: str) -> float | None:
+    """Time [s] of the first health update at WARN or ERROR whose named fault is ``kind`` (None: none)."""
+    return next((float(ti) for ti, r in zip(t, rows) if LEVELS.get(int(r["level"])) in ("WARN", "ERROR")
+                 and fault_name(r) == kind), None)
+
+
+def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float) -> dict:
+    """One bag of ``kind`` reaching severity ``to`` [the kind's unit] over ``ramp_s`` [s] from the start, noise
+    ``seed``, and the twin over it.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``to``, ``seed``, ``ramp_s``; ``named`` and ``confidence`` [-] at the last health update;
+        ``alarms`` (``alarm_records``); ``loss_end`` [-] and ``crossing_s`` [s] (:func:`truth_crossing`;
+        None without a fault); ``first_right_s`` [s] (:func:`first_named_alarm`) and ``delay_s`` [s] from the
+        crossing (None when either is).
+    """
+    tag = f"{kind}_{to}_{seed}"
+    bag, twin = out / f"{tag}.mcap", out / f"{tag}_twin.mcap"
+    fault = [] if to is None else ["--fault", kind, "--fault-to", f"{to:g}", "--fault-ramp", f"{ramp_s:g}"]
+    argv = ["synth-bench", "--profile-file", str(PROFILE), "--clearance-factor", "1.0", "--seed",
             str(seed), "-o", str(bag), "--overwrite", "--quiet", *fault]
     if cli_main(argv) or cli_main(["run-bag", str(bag), "-o", str(twin), "--overwrite", "--quiet",
                                    "--health", "window_s=0.5", "--health", "settle_s=0.5"]):
         raise RuntimeError(f"{kind} {to} seed {seed}: a command failed")
-    _, rows = load_health(twin)
-    return fault_name(rows[-1]), float(rows[-1]["fault_confidence"])
+    t, rows = load_health(twin)
+    crossing, loss_end = (None, 0.0) if to is None else truth_crossing(cfg, bag, kind)
+    first = first_named_alarm(t, rows, kind)
+    return {"kind": kind, "to": to, "seed": seed, "ramp_s": ramp_s, "named": fault_name(rows[-1]),
+            "confidence": float(rows[-1]["fault_confidence"]), "alarms": alarm_records(t, rows),
+            "loss_end": loss_end, "crossing_s": crossing, "first_right_s": first,
+            "delay_s": None if crossing is None or first is None else first - crossing}
 
 
 def confusion(results) -> str:
-    """Markdown table: true kind per row, named kind per column (counts)."""
-    named = [k for k in KINDS if any(r[2] == k for r in results)]
-    cells = collections.Counter((r[0], r[2]) for r in results)
+    """Markdown table over the bags: true kind per row, the kind named at the last health update per column."""
+    named = [k for k in KINDS if any(r["named"] == k for r in results)]
+    cells = collections.Counter((r["kind"], r["named"]) for r in results)
     lines = ["| true \\ named | " + " | ".join(named) + " |", "|---" * (len(named) + 1) + "|"]
     for kind in CASES:
         lines.append(f"| {kind} | " + " | ".join(str(cells.get((kind, n), "")) for n in named) + " |")
     return "\n".join(lines)
 
 
+def _span(values, fmt: str = "{:.1f}") -> str:
+    v = sorted(x for x in values if x is not None)
+    if not v:
+        return "–"
+    lo, hi = fmt.format(v[0]), fmt.format(v[-1])
+    return lo if lo == hi else f"{lo} … {hi}"
+
+
+def alarm_summary(results) -> dict:
+    """Per true kind and ``all`` (the fault bags): bags, alarms, alarms naming the true kind, their fraction
+    (None without alarms), the kinds the other alarms named, 2-pt crossings [s] and delays [s] (:func:`run_case`),
+    bags whose fault crossed 2 pt but no alarm named it."""
+    out = {}
+    groups = {k: [r for r in results if r["kind"] == k] for k in CASES}
+    groups["all"] = [r for r in results if r["kind"] != "healthy"]
+    for kind, rs in groups.items():
+        alarms = [(r["kind"], a) for r in rs for a in r["alarms"]]
+        right = sum(a["fault"] == k for k, a in alarms)
+        out[kind] = {"bags": len(rs), "alarms": len(alarms), "right": right,
+                     "fraction": right / len(alarms) if alarms else None,
+                     "wrong_named": dict(collections.Counter(str(a["fault"]) for k, a in alarms if a["fault"] != k)),
+                     "crossing_s": [r["crossing_s"] for r in rs], "delay_s": [r["delay_s"] for r in rs],
+                     "missed": sum(r["crossing_s"] is not None and r["first_right_s"] is None for r in rs)}
+    return out
+
+
+def alarm_table(summary: dict) -> str:
+    """Markdown table of :func:`alarm_summary`: per kind the alarms naming it, the 2-pt crossings and delays."""
+    lines = ["| true kind | bags | alarms | naming the true kind | other alarms named | loss crosses 2 pt at [s] "
+             "| delay to the first alarm naming it [s] | crossed, never named in an alarm |", "|---" * 8 + "|"]
+    for kind, s in summary.items():
+        frac = "–" if s["fraction"] is None else f"{s['right']} ({100 * s['fraction']:.0f} %)"
+        other = ", ".join(f"{k} {n}" for k, n in sorted(s["wrong_named"].items())) or "–"
+        crossed = [c for c in s["crossing_s"] if c is not None]
+        cross = "never" if kind != "all" and not crossed and kind != "healthy" else _span(crossed)
+        delay = _span(s["delay_s"], "{:+.1f}")
+        if "…" in delay and len([d for d in s["delay_s"] if d is not None]) > 2:
+            delay += f" (median {float(np.median([d for d in s['delay_s'] if d is not None])):+.1f})"
+        lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {other} | {cross} | {delay} | {s['missed']} |")
+    return "\n".join(lines)
+
+
+def _cases(seeds: str, severity: str) -> list[tuple[str, float | None, int]]:
+    """(kind, severity, seed) of every bag: ``seeds`` comma-separated integers, ``severity`` high | low | both."""
+    try:
+        seed_list = [int(s) for s in seeds.split(",")]
+    except ValueError:
+        raise InputError("--seeds", seeds, "comma-separated integers") from None
+    pick = {"high": (1,), "low": (0,), "both": (0, 1)}
+    if severity not in pick:
+        raise InputError("--severity", severity, " | ".join(pick))
+    out = []
+    for kind, tos in CASES.items():
+        levels = (None,) if tos[0] is None else tuple(tos[i] for i in pick[severity])
+        out += [(kind, to, seed) for to in levels for seed in seed_list]
+    return out
+
+
+def run_bags(out: Path, cases, ramp_s: float) -> list[dict]:
+    """:func:`run_case` over ``cases`` ((kind, severity, seed)) into ``out``, one progress line per bag."""
+    from ..config import load_config
+    cfg = load_config()
+    out.mkdir(parents=True, exist_ok=True)
+    results, t0 = [], time.time()
+    for i, (kind, to, seed) in enumerate(cases, 1):
+        r = run_case(cfg, kind, to, seed, out, ramp_s)
+        results.append(r)
+        alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {a['fault']}" for a in r["alarms"])
+        cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
+        print(f"[{i}/{len(cases)} {time.time() - t0:4.0f} s] {kind:20s} {to!s:8s} seed {seed}: last {r['named']} "
+              f"({r['confidence']:.2f}); 2 pt at {cross}; alarms: {alarms or 'none'}", flush=True)
+    return results
+
+
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m gerotor_twin.offline.diagnosis_bench", description=__doc__)
+    p = argparse.ArgumentParser(prog="python -m gerotor_twin.offline.diagnosis_bench", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--out", default="diagnosis_bench", help="directory for the bags and results.json")
-    p.add_argument("--seeds", default="1,2", help="noise seeds, comma-separated (default 1,2)")
+    p.add_argument("--seeds", default="1", help="noise seeds, comma-separated (default 1)")
+    p.add_argument("--severity", default="high", help="high | low | both severities of each kind (default high)")
+    p.add_argument("--ramp", type=float, default=None,
+                   help="seconds from the start until a fault reaches its severity (default: the bag's length, 10 s; "
+                        "0: a step)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
     args = p.parse_args(argv)
     if args.model_windows:
         print(model_windows_table())
         return 0
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "profile.yaml").write_text(PROFILE)
-    results, t0 = [], time.time()
-    for kind, tos in CASES.items():
-        for to in sorted(set(tos), key=lambda v: -1 if v is None else v):
-            for seed in (int(s) for s in args.seeds.split(",")):
-                name, p_named = run_case(kind, to, seed, out)
-                results.append((kind, to, name, p_named, seed))
-                print(f"{kind:20s} {to!s:8s} seed {seed}: {name} ({p_named:.2f})", flush=True)
-    (out / "results.json").write_text(json.dumps(results, indent=1))
-    print(confusion(results))
-    print(f"{len(results)} bags in {time.time() - t0:.0f} s")
+    try:
+        ramp_s = profile_s() if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
+        cases = _cases(args.seeds, args.severity)
+    except InputError as e:
+        p.error(str(e))
+    t0, out = time.time(), Path(args.out)
+    results = run_bags(out, cases, ramp_s)
+    summary = alarm_summary(results)
+    (out / "results.json").write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
+                                                  "results": results, "summary": summary}, indent=1))
+    print(confusion(results), "", alarm_table(summary), sep="\n")
+    print(f"{len(results)} bags in {time.time() - t0:.0f} s; wrote {out / 'results.json'}")
     return 0
 
 

@@ -10,7 +10,7 @@ module              responsibility
 ``layout``          ``PAGE``: the ordered list of block functions (add plots here)
 ``panels``          block specs (TimeSeries, Table, Image), min/max decimation
 ``timeseries``      the interactive time plots; ``bench_panel`` (raw under means)
-``health_panels``   the health monitor's plots (reference efficiency, leakage factor, alarms)
+``health_panels``   the health monitor's plots (reference efficiency, leakage factor, alarms) and fault timeline
 ``tables``          tables of the page, their CSV text, the aligned-series CSV
 ``figures``         matplotlib figures (PNG bytes), readable style, small multiples
 ``provenance``      files, pump config and calibration source, software, model

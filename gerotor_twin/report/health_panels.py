@@ -3,17 +3,19 @@
 Two plots, for the first twin log that carries health updates: the estimated efficiency at the
 monitor's reference point with its ±2σ band, its calibrated (healthy) value and the WARN / ERROR
 thresholds; and the estimated leakage factor with its ±2σ band. The intervals the monitor spent
-in WARN or ERROR are shaded in both (:func:`gerotor_twin.twin.health.alarm_intervals`).
+in WARN or ERROR are shaded in both, labelled with the fault the classifier named at their last update
+(:func:`gerotor_twin.twin.health.alarm_records`); beside them, the fault timeline: a table of the alarms
+with level, start, end, named fault and its probability (none when the monitor never left OK).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..twin.health import HEALTH_FIELDS, HealthSettings, alarm_intervals
+from ..twin.health import HEALTH_FIELDS, HealthSettings, alarm_records, fault_text
 from .context import ReportContext
-from .panels import Band, Interval, TimeSeries, Trace
+from .panels import Band, Column, Interval, Table, TimeSeries, Trace
 
-__all__ = ["ts_health_efficiency", "ts_health_leakage"]
+__all__ = ["ts_health_efficiency", "ts_health_leakage", "fault_timeline"]
 
 HEALTH = "Pump health (online estimate)"
 ALARM_COLORS = {"WARN": "rgba(240,170,0,0.18)", "ERROR": "rgba(220,50,40,0.18)"}
@@ -41,9 +43,18 @@ def _setting(twin, name: str) -> float:
         return float(getattr(HealthSettings(), name))
 
 
+def _alarms(t: np.ndarray, v: np.ndarray) -> list[dict]:
+    """The alarm records (:func:`~gerotor_twin.twin.health.alarm_records`) of the health updates ``v`` at ``t`` [s]."""
+    return alarm_records(t, [dict(zip(HEALTH_FIELDS, row)) for row in v])
+
+
 def _intervals(t: np.ndarray, v: np.ndarray) -> tuple[Interval, ...]:
-    rows = [{"level": lvl} for lvl in v[:, F["level"]]]
-    return tuple(Interval(a, b, name, ALARM_COLORS[name]) for name, a, b in alarm_intervals(t, rows))
+    out = []
+    for a in _alarms(t, v):
+        named = fault_text(a["fault"], a["confidence"])
+        out.append(Interval(a["start_s"], a["end_s"], a["level"] if named == "-" else f"{a['level']}: {named}",
+                            ALARM_COLORS[a["level"]]))
+    return tuple(out)
 
 
 def ts_health_efficiency(ctx: ReportContext) -> TimeSeries | None:
@@ -81,3 +92,23 @@ def ts_health_leakage(ctx: ReportContext) -> TimeSeries | None:
         "common tooth-tip and lateral clearance scaling that explains it, k^(1/n) with n ≈ 3 the loss exponent.",
         (Band("±2σ", t, k - 2 * sd, k + 2 * sd, "rgba(31,95,168,0.15)", "rgba(31,95,168,0.5)"),),
         intervals=_intervals(t, v))
+
+
+def fault_timeline(ctx: ReportContext) -> Table | None:
+    """The health monitor's alarms with the fault named at each one's last update and its probability (None
+    without health updates or without an alarm)."""
+    found = _health(ctx)
+    if found is None:
+        return None
+    twin, t, v = found
+    alarms = _alarms(t, v)
+    if not alarms:
+        return None
+    cols = (Column("level", "{}", True), Column("from [s]", "{:.1f}"), Column("to [s]", "{:.1f}"),
+            Column("fault named", "{}", True), Column("probability [-]", "{:.2f}"))
+    rows = tuple((a["level"], a["start_s"], a["end_s"], a["fault"] or "-", a["confidence"]) for a in alarms)
+    return Table("tab-fault-timeline", HEALTH, cols, rows, f"{ctx.stem}_fault_timeline.csv",
+                 "Each interval the monitor spent in WARN or ERROR (times as in the plots) with the fault the "
+                 "classifier named at its last update (healthy, a fault kind, or unknown: no kind explains the "
+                 "residuals, or one operating point only) and its probability (for unknown: that of a fault); '-': the "
+                 "log carries no diagnosis.", f"Fault timeline ({twin.label})")

@@ -70,6 +70,7 @@ PAGE = [
     TS.ts_efficiency,
     H.ts_health_efficiency,
     H.ts_health_leakage,
+    H.fault_timeline,
     T.summary_table,
     T.comparison_table,
     T.plateau_tables,

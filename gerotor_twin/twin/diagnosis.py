@@ -18,12 +18,16 @@ the theoretical flow there, so every kind's parameter θ is "flow change at the 
 theoretical flow" [-] (a loss for wear and air ingress when θ > 0), with the same prior and the same drift.
 
 Likelihood per kind
-    θ is a random walk (``drift_per_sqrt_s`` [1/√s]) from a prior N(0, ``prior_sd``²): a scalar
-    Kalman filter (:mod:`.leakage_filter`) over the last ``horizon`` windows, e_i = θ_i·d_i + v_i,
+    θ starts from a prior N(0, ``prior_sd``²), grows at a constant rate r (faults develop: a ramp; with
+    ``trend`` r ~ N(0, (``prior_sd`` / T)²), T the time spanned by the windows in view, so θ may cross its
+    prior range within them; a step is r = 0) and drifts as a random walk (``drift_per_sqrt_s``
+    [1/√s]): a Kalman filter on (θ, r) over the last ``horizon`` windows, e_i = θ_i·d_i + v_i,
     v_i ~ N(0, σ_i²).  The log-likelihood is the sum of the log predictive densities of the
     innovations (prediction-error decomposition); with zero drift it is the marginal likelihood
-    log N(e; 0, diag σ² + prior_sd²·d dᵀ) of a Gaussian linear model, which penalises the fitted
-    parameter (Occam factor) as BIC does asymptotically.  A kind whose fitted θ has the sign the fault
+    log N(e; 0, diag σ² + prior_sd²·d dᵀ + (prior_sd/T)²·(d∘τ)(d∘τ)ᵀ), τ_i = t_i − t_0, of a Gaussian
+    linear model, which penalises the fitted parameters (Occam factor) as BIC does asymptotically.  Without
+    the trend a fault that grows by more than the random walk allows within the horizon (a ramp of
+    several points in seconds) fits no kind and is ``unknown``.  A kind whose fitted θ has the sign the fault
     cannot have (a wear or air ingress that adds flow) beyond ``sign_sd`` standard deviations is
     excluded.  ``healthy``: e_i ~ N(0, σ_i²).  ``unknown``: e_i ~ N(0, (``unknown_scale``·σ_i)²).
     ``suction_restriction``: the flow residuals as ``healthy`` (the twin runs on the measured suction
@@ -48,7 +52,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from gerotor_twin.errors import InputError, check_int, check_ranges
-from gerotor_twin.twin import leakage_filter as lf
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
            "kind_log_likelihood", "classify", "point_key", "missing_fraction", "KIND_CODES"]
@@ -105,7 +108,8 @@ class WindowRecord:
 class DiagnosisSettings:
     """Settings of the classifier (module doc); θ in fractions of the reference theoretical flow.
 
-    ``horizon`` windows [-]; ``prior_sd`` [-] and ``drift_per_sqrt_s`` [1/√s] of θ; ``unknown_scale`` [-] (noise
+    ``horizon`` windows [-]; ``prior_sd`` [-] and ``drift_per_sqrt_s`` [1/√s] of θ; ``trend``: θ may also grow at
+    a constant rate (prior standard deviation ``prior_sd`` / the windows' time span); ``unknown_scale`` [-] (noise
     factor of ``unknown``); ``chi2_z`` [-]; ``sign_sd`` [-]; ``dropout_min`` [-]; ``suction_sd_pa`` [Pa] (floor of
     the suction pressure's noise) and ``suction_prior_pa`` [Pa] (prior restriction drop at the largest flow);
     finite-difference steps ``rel_step`` [-] (clearance factor), ``air_step`` [-] (free-air fraction),
@@ -114,6 +118,7 @@ class DiagnosisSettings:
     horizon: int = 30
     prior_sd: float = 0.2
     drift_per_sqrt_s: float = 0.002
+    trend: bool = True
     unknown_scale: float = 4.0
     chi2_z: float = 4.0
     sign_sd: float = 3.0
@@ -130,6 +135,8 @@ class DiagnosisSettings:
             ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
             ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)))
         check_int("diagnosis_horizon", self.horizon, 1, 10**5)
+        if not isinstance(self.trend, bool):
+            raise InputError("diagnosis_trend", self.trend, "true | false")
 
 
 @dataclass(frozen=True)
@@ -174,8 +181,12 @@ def point_key(rec: WindowRecord, rpm_step: float = 10.0, pressure_step_pa: float
             round(rec.p_suction / pressure_step_pa), None if rec.oil_k is None else round(rec.oil_k / oil_step_k))
 
 
-def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float) -> tuple[float, float, float, float]:
-    """Log-likelihood of residuals ``e`` under e_i = θ_i·d_i + v_i, θ a random walk (scalar Kalman filter).
+def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float,
+                        rate_sd: float = 0.0) -> tuple[float, float, float, float]:
+    """Log-likelihood of residuals ``e`` under e_i = θ_i·d_i + v_i, θ a trend plus a random walk (Kalman filter).
+
+    θ_i = θ_0 + r·(t_i − t_0) + w_i: a fault that grows at a constant rate r (a ramp; r = 0 a step) and drifts
+    (w a random walk), θ_0 ~ N(0, ``prior_sd``²), r ~ N(0, ``rate_sd``²).
 
     Parameters
     ----------
@@ -185,22 +196,32 @@ def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float)
         Prior standard deviation of θ [-].
     drift_per_sqrt_s : float
         Random-walk rate of θ [1/√s].
+    rate_sd : float, optional
+        Prior standard deviation of the growth rate r [1/s] (0: no trend, a scalar filter on θ).
 
     Returns
     -------
     tuple of float
         Log-likelihood [-], final θ [-] and its standard deviation [-], χ² of the normalised innovations [-].
     """
-    est = lf.LeakageEstimate(k=0.0, var=prior_sd ** 2)
+    x = np.zeros(2)                                        # θ [-], r [1/s]
+    p = np.diag([prior_sd ** 2, rate_sd ** 2])
     ll = chi2 = 0.0
+    t_prev = None
     for ei, di, si, ti in zip(e, d, sd, t_s):
-        est = lf.predict(est, float(ti), drift_per_sqrt_s)
-        s = di * di * est.var + si * si
-        nu = ei - di * est.k
+        dt = 0.0 if t_prev is None else max(0.0, float(ti) - t_prev)
+        t_prev = float(ti)
+        f = np.array([[1.0, dt], [0.0, 1.0]])
+        x, p = f @ x, f @ p @ f.T + np.diag([drift_per_sqrt_s ** 2 * dt, 0.0])
+        h = np.array([float(di), 0.0])
+        ph = p @ h
+        s = float(h @ ph) + float(si) ** 2
+        nu = float(ei) - float(h @ x)
         ll -= 0.5 * (nu * nu / s + math.log(2.0 * math.pi * s))
         chi2 += nu * nu / s
-        est = lf.update(est, float(ei), float(di), float(si * si))
-    return ll, est.k, est.sd, chi2
+        gain = ph / s
+        x, p = x + gain * nu, p - np.outer(gain, ph)
+    return ll, float(x[0]), math.sqrt(max(float(p[0, 0]), 0.0)), chi2
 
 
 def _white_log_likelihood(e, sd) -> float:
@@ -309,9 +330,11 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     t = [r.t_s for r in recs]
     ll = {"healthy": _white_log_likelihood(e, sd), "unknown": _white_log_likelihood(e, [s.unknown_scale * v for v in sd])}
     theta, chi2 = {}, {"healthy": float(sum((a / b) ** 2 for a, b in zip(e, sd)))}
+    span = t[-1] - t[0]
+    rate_sd = s.prior_sd / span if s.trend and span > 0 else 0.0
     for kind in FLOW_KINDS:
         ll_k, th, th_sd, chi2[kind] = kind_log_likelihood(e, [g[kind] for g in sigs], sd, t, s.prior_sd,
-                                                          s.drift_per_sqrt_s)
+                                                          s.drift_per_sqrt_s, rate_sd)
         theta[kind] = th
         if _SIGN[kind] and th * _SIGN[kind] < -s.sign_sd * th_sd:
             continue                                    # the fault cannot move the flow that way
