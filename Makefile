@@ -2,8 +2,8 @@
 #   make demo   set up .venv, install everything, run the main job
 #   make test   same set-up, then the whole test suite
 # `make setup` also compiles the model's numba kernels once (python -m gerotor_twin.precompile: the
-# mobility and fixed-centre models, 1.5-3.5 min on 2 shared cores) into the on-disk cache, so no first
-# start of those models compiles (short and fdm compile on first use, ~10-20 s, with a line saying so);
+# mobility and fixed-centre models, 40-80 s on 2 shared cores) into the on-disk cache, so no first
+# start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 5-25 s, with a line saying so);
 # the cache holds only the argument types, so it serves every pump, table size and fluid model.
 PYTHON ?= python3
 VENV   := .venv
