@@ -78,7 +78,7 @@ bench-accuracy: $(STAMP)
 	    --json out/bench/accuracy.json --write-doc docs/numerics.md
 
 test: $(STAMP) chromium
-	$(PY) -m pytest -q test
+	$(PY) -m pytest -q --durations=15 test
 
 # headless Chromium for the report-rendering test (Debian package; installed when root)
 chromium:
