@@ -229,7 +229,7 @@ class PumpModel:
                     theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec,
                                                     rec_p, rec_peak, rec_g, counters, vols)
             else:
-                constrained = self.kernel.pc.gear_constrained
+                constrained = self.kernel.pc.gear_constrained and self._move == K.MOVE_MOBILITY   # fixed: no gear
                 with self._first_use() if constrained else contextlib.nullcontext():
                     theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
                                            counters, vols, self._move, ws.gear if constrained else None)
