@@ -36,7 +36,7 @@ Inlining
 Argument types
     numba compiles one specialisation per tuple of argument *types*; an ``int``
     where the kernel usually gets a ``float`` (a YAML ``1`` instead of ``1.0``)
-    would compile the whole stepper again (≈ 70 s).  :func:`typed` casts the
+    would compile the whole stepper again (≈ 40 s).  :func:`typed` casts the
     scalar fields of the kernel's named tuples to their declared types, so every
     pump hits the same compiled code (``python -m gerotor_twin.precompile``
     builds it at install).

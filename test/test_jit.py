@@ -178,7 +178,7 @@ def test_precompile_leaves_nothing_to_compile():
     compiled stepper the mobility model shares) a new process that runs it again compiles nothing
     (``--expect-cached`` exits 0 and says so): every specialisation a first model start hits is cached on disk.
     On the test machine's own cache, which ``make setup`` has built: a cold cache would cost a full compile
-    (1.5–4 min) for what the first run here does anyway when the cache is stale.  That a compilation is seen at
+    (40–80 s) for what the first run here does anyway when the cache is stale.  That a compilation is seen at
     all (the exit status 1 of a cold cache) is the compile listener's, tested below on a small kernel in a cold
     cache."""
     import os
