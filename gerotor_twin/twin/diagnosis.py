@@ -311,15 +311,16 @@ def missing_fraction(records) -> float:
 
 def _fit_kind(kind: str, recs, sigs, e, sd, t, s: DiagnosisSettings, rate_sd: float, relinearise=None):
     """:func:`kind_log_likelihood` of ``kind`` on the signature columns ``sigs``, re-linearised at the fitted
-    size up to ``s.relinearise`` times by ``relinearise(recs, kind, θ)`` (a new column, or None: keep this one;
-    it stops when the column no longer changes)."""
-    d = [g[kind] for g in sigs]
+    size up to ``s.relinearise`` times by ``relinearise(recs, kind, θ, n)`` (the column at the size fitted with
+    the column of n steps, and its size in steps; or None: keep this one); it stops when the size no longer
+    changes."""
+    d, n = [g[kind] for g in sigs], 1.0
     fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
     for _ in range(s.relinearise if relinearise is not None else 0):
-        d_new = relinearise(recs, kind, fit[1])
-        if d_new is None or d_new == d:
+        new = relinearise(recs, kind, fit[1], n)
+        if new is None or new[1] == n:
             break
-        d = d_new
+        d, n = new
         fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
     return fit
 
@@ -352,8 +353,9 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
         Per record, the signature of each of :data:`FLOW_KINDS` [m³/s per unit θ] (:class:`SteadySignatures`).
     settings : DiagnosisSettings, optional
     relinearise : callable, optional
-        ``relinearise(records, kind, θ)``: the kind's signature per record re-linearised at the fitted size θ [-]
-        [m³/s per unit θ], or None where it keeps the one given (:meth:`SteadySignatures.relinearised`).
+        ``relinearise(records, kind, θ, n)``: the kind's signature per record [m³/s per unit θ] re-linearised at
+        the size θ [-] fitted with the column of n finite-difference steps, with its own size in steps, or None
+        where it keeps the one given (:meth:`SteadySignatures.relinearised`).
         Without it the signatures given are used as they are.
 
     Returns
@@ -420,7 +422,9 @@ class SteadySignatures:
         self._sized: dict = {}
         self.p_atm = config.fluid.atmospheric_pa
         rpm, bar = reference
-        ref = self._raw((rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, None))
+        self.reference_op = (rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, None)
+        ref = self._raw(self.reference_op)
+        self._reference = ref["q0"], ref["q_th"]
         self.scale = {k: ref["q_th"] / abs(ref[k]) if ref[k] != 0 else 1.0 for k in FLOW_KINDS}
 
     def _q(self, op: tuple, kind: str | None = None, size: float = 0.0) -> tuple[float, float]:
@@ -470,33 +474,49 @@ class SteadySignatures:
         out["flowmeter_drift"] = rec.q_pred * self.scale["flowmeter_drift"]
         return out
 
-    def relinearised(self, records, kind: str, theta: float) -> list[float] | None:
-        """The signature of ``kind`` per record [m³/s per unit θ] re-linearised at the fault size θ [-].
+    def _change(self, key: tuple, q0: float, kind: str, n: float) -> float:
+        """Flow change [m³/s] at the cache key's operating point (``"reference"``: the reference point) with the
+        fault ``kind`` of ``n`` finite-difference steps (cached)."""
+        change = self._sized.get((key, kind, n))
+        if change is None:
+            op = self.reference_op if key == "reference" else self._op(key)
+            change = self._sized[(key, kind, n)] = self._q(op, kind, n * getattr(self.settings, _STEP[kind]))[0] - q0
+        return change
 
-        θ in steps of the finite difference is n = θ·scale (scale: the column's factor, module doc); the
-        column becomes (Q(fault of size n steps) − Q) / n × scale at each record's operating point, the secant
-        from no fault to the fitted size (the linear signature is n = 1).  n is rounded to a quarter octave
-        (2^(j/4)) so that nearby fits share the cached steady runs.  None — keep the linear column — for the
-        flow-meter gain (linear), within one step (|n| ≤ 1: the finite difference interpolates there), in the
-        direction the fault cannot have (:data:`_SIGN`), beyond a loss of the whole theoretical flow
-        (|θ| > 1), and where the steady model refuses the size (outside the config's ranges).
+    def relinearised(self, records, kind: str, theta: float, steps: float = 1.0) -> tuple[list[float], float] | None:
+        """The signature of ``kind`` per record [m³/s per unit θ] re-linearised at the fitted size θ [-].
+
+        θ is the flow change at the reference point over its theoretical flow; fitted with the column taken at
+        ``steps`` (n, in finite-difference steps; 1: the linear signature), it corresponds to n' = θ / c(n)
+        steps, c(n) the reference point's |flow change| / theoretical flow per step at n.  The column becomes
+        the secant from no fault to n' steps, (Q(n') − Q) at each record's operating point scaled by
+        theoretical flow / |Q(n') − Q| at the reference point, so that θ keeps its meaning (and its prior).
+        n' is rounded to a quarter octave (2^(j/4)) so that nearby fits share the cached steady runs.  None —
+        keep the linear column — for the flow-meter gain (linear), within one step (|n'| ≤ 1: the finite
+        difference interpolates there), in the direction the fault cannot have (:data:`_SIGN`), beyond a loss of
+        the whole theoretical flow (|θ| > 1), and where the steady model refuses the size (outside the
+        config's ranges).
+
+        Returns
+        -------
+        tuple or None
+            The column per record and n'.
         """
         if kind not in _STEP or not abs(theta) <= 1.0 or (_SIGN[kind] and theta * _SIGN[kind] < 0):
             return None
-        steps = theta * self.scale[kind]
-        if abs(steps) <= 1.0:
+        q0_ref, qth_ref = self._reference
+        try:
+            per_step = (abs(self._change("reference", q0_ref, kind, steps)) / abs(steps) / qth_ref
+                        if steps != 1.0 else 1.0 / self.scale[kind])
+            n = theta / per_step
+            if not abs(n) > 1.0:
+                return None
+            n = math.copysign(2.0 ** (round(4.0 * math.log2(abs(n))) / 4.0), n)
+            ref = abs(self._change("reference", q0_ref, kind, n))
+            out = []
+            for rec in records:
+                key, raw = self._point(rec)
+                out.append(self._change(key, raw["q0"], kind, n) / ref * qth_ref)
+        except InputError:
             return None
-        n = math.copysign(2.0 ** (round(4.0 * math.log2(abs(steps))) / 4.0), steps)
-        size = n * getattr(self.settings, _STEP[kind])
-        out = []
-        for rec in records:
-            key, raw = self._point(rec)
-            change = self._sized.get((key, kind, n))
-            if change is None:
-                try:
-                    change = self._q(self._op(key), kind, size)[0] - raw["q0"]
-                except InputError:
-                    return None
-                self._sized[(key, kind, n)] = change
-            out.append(change / n * self.scale[kind])
-        return out
+        return (out, n) if ref > 0 else None
