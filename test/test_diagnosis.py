@@ -13,7 +13,8 @@ import pytest
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, KIND_CODES, SpeedCounter, SteadySignatures,
-                                         WindowRecord, _fit_kind, classify, kind_log_likelihood, missing_fraction)
+                                         WindowRecord, _fit_kind, classify, kind_log_likelihood, missing_fraction,
+                                         operating_points, point_key)
 from gerotor_twin.twin.health import alarm_records
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
                                                  main as bench_main, model_records)
@@ -100,6 +101,8 @@ def test_bad_settings():
         DiagnosisSettings(horizon=0)
     with pytest.raises(InputError, match="diagnosis_relinearise = -1 is invalid"):
         DiagnosisSettings(relinearise=-1)
+    with pytest.raises(InputError, match="diagnosis_point_pressure_pa = 0"):
+        DiagnosisSettings(point_pressure_pa=0.0)
     with pytest.raises(InputError, match="diagnosis_trend = 'yes'"):
         DiagnosisSettings(trend="yes")
     with pytest.raises(InputError, match="signatures"):
@@ -264,3 +267,15 @@ def test_alarm_record_names_closed_form():
     assert warn == {"start_s": 2.0, "end_s": 5.0, "level": "WARN", "fault": "lateral_wear", "confidence": 0.7,
                     "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
     assert (error["fault"], error["first_fault"], error["named_at_s"]) == ("lateral_wear", "lateral_wear", 6.0)
+
+
+def test_operating_points_by_tolerance_closed_form():
+    """Closed form: windows on one plateau (603.3, 604.3, 602.3 kPa at 1000 rpm, across a 5 kPa rounding step of
+    the signature cache) are one operating point; 5 against 25 bar, or 1000 against 2500 rpm, are two."""
+    def rec(rpm, p):
+        return WindowRecord(1.0, rpm * math.pi / 30, p, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)
+    plateau = [rec(1000.01, 603339.0), rec(1000.01, 604264.0), rec(999.98, 602289.0)]
+    assert len({point_key(r)[:2] for r in plateau}) == 2
+    assert operating_points(plateau, 0.01, 5e4) == 1
+    assert operating_points(plateau + [rec(1000.0, 2.6e6)], 0.01, 5e4) == 2
+    assert operating_points(plateau + [rec(2500.0, 6.0e5)], 0.01, 5e4) == 2

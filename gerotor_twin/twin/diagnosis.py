@@ -43,8 +43,8 @@ Likelihood per kind
 Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
     also when the best kind's innovations have χ² > n + ``chi2_z``·√(2n) (no kind explains the
-    residuals), and when a flow kind wins on windows at fewer than two operating points (speed, delivery
-    pressure; :func:`point_key`): there every kind fits the one residual and only the priors differ.  The
+    residuals), and when a flow kind wins on windows at fewer than two operating points (speed within
+    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ.  The
     confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
     samples missing over the horizon (:func:`missing_fraction`); above ``dropout_min`` it is named when
     the flow residuals are explained by ``healthy`` (confidence: that probability).
@@ -59,7 +59,7 @@ import numpy as np
 from gerotor_twin.errors import InputError, check_int, check_ranges
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
-           "kind_log_likelihood", "classify", "point_key", "missing_fraction", "KIND_CODES"]
+           "kind_log_likelihood", "classify", "point_key", "operating_points", "missing_fraction", "KIND_CODES"]
 
 #: fault kinds with a flow signature, in the order of the signature columns
 FLOW_KINDS = ("tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift")
@@ -119,7 +119,9 @@ class DiagnosisSettings:
     the suction pressure's noise) and ``suction_prior_pa`` [Pa] (prior restriction drop at the largest flow);
     finite-difference steps ``rel_step`` [-] (clearance factor), ``air_step`` [-] (free-air fraction),
     ``pressure_step_pa`` [Pa]; ``relinearise`` [-]: at most this many re-linearisations of a kind's signature at
-    its fitted size (0: the signatures at the steps only; module doc).
+    its fitted size (0: the signatures at the steps only; module doc); ``point_speed_tol`` [-] (relative) and
+    ``point_pressure_pa`` [Pa]: windows within both of each other are one operating point
+    (:func:`operating_points`; the health monitor passes its steady-window tolerances).
     """
     horizon: int = 30
     prior_sd: float = 0.2
@@ -135,12 +137,15 @@ class DiagnosisSettings:
     air_step: float = 0.01
     pressure_step_pa: float = 1e5
     relinearise: int = 2
+    point_speed_tol: float = 0.01
+    point_pressure_pa: float = 5e4
 
     def __post_init__(self):
         check_ranges(self, "diagnosis_", (
             ("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3), ("chi2_z", 0.0, 1e3),
             ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
-            ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)))
+            ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6),
+            ("point_speed_tol", 1e-4, 1.0), ("point_pressure_pa", 1.0, 1e7)))
         check_int("diagnosis_horizon", self.horizon, 1, 10**5)
         check_int("diagnosis_relinearise", self.relinearise, 0, 10)
         if not isinstance(self.trend, bool):
@@ -187,6 +192,19 @@ def point_key(rec: WindowRecord, rpm_step: float = 10.0, pressure_step_pa: float
     and ``oil_step_k`` [K]: (speed, delivery, suction, oil) in steps (oil None: the reference temperature)."""
     return (round(rec.omega * 30.0 / math.pi / rpm_step), round(rec.p_delivery / pressure_step_pa),
             round(rec.p_suction / pressure_step_pa), None if rec.oil_k is None else round(rec.oil_k / oil_step_k))
+
+
+def operating_points(records, speed_tol: float, pressure_tol_pa: float) -> int:
+    """Number of distinct operating points among ``records`` [-]: a record joins the first point found whose speed is
+    within ``speed_tol`` (relative) [-] and delivery pressure within ``pressure_tol_pa`` [Pa] of the record that
+    opened it, else it opens a new one (windows on one plateau are one point however the rounding of
+    :func:`point_key` falls)."""
+    points: list[WindowRecord] = []
+    for r in records:
+        if not any(abs(r.omega - q.omega) <= speed_tol * max(abs(q.omega), 1.0)
+                   and abs(r.p_delivery - q.p_delivery) <= pressure_tol_pa for q in points):
+            points.append(r)
+    return len(points)
 
 
 def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float,
@@ -337,7 +355,7 @@ def _decide(ll: dict, chi2: dict, recs, s: DiagnosisSettings) -> tuple[str, dict
     kind = best if prob[best] >= prob["unknown"] else "unknown"
     if chi2[best] > n + s.chi2_z * math.sqrt(2.0 * n):
         kind = "unknown"
-    if kind in FLOW_KINDS and len({point_key(r)[:2] for r in recs}) < 2:
+    if kind in FLOW_KINDS and operating_points(recs, s.point_speed_tol, s.point_pressure_pa) < 2:
         kind = "unknown"                     # one operating point: every kind fits it, only the priors differ
     return kind, prob, best
 

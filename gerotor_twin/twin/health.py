@@ -57,7 +57,7 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
+from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
@@ -374,8 +374,10 @@ class HealthMonitor:
         s = self.settings
         try:
             if self._signature_of is None:
-                self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
-                                                      reference=(s.reference_rpm, s.reference_bar))
+                self._signature_of = SteadySignatures(
+                    self.base_config, getattr(self.model, "bearing_name", "mobility"),
+                    DiagnosisSettings(point_speed_tol=s.speed_tol, point_pressure_pa=s.pressure_tol_pa),
+                    reference=(s.reference_rpm, s.reference_bar))
             signature = self._signature_of(rec)
         except InputError:
             return                  # outside the pump's range (a steady model cannot run there): not classified
