@@ -531,10 +531,12 @@ class SteadySignatures:
                 return None
             n = math.copysign(2.0 ** (round(4.0 * math.log2(abs(n))) / 4.0), n)
             ref = abs(self._change("reference", q0_ref, kind, n))
+            if not ref > 0.0:
+                return None                     # the fault moves no flow at the reference point: θ has no scale
             out = []
             for rec in records:
                 key, raw = self._point(rec)
                 out.append(self._change(key, raw["q0"], kind, n) / ref * qth_ref)
         except InputError:
             return None
-        return (out, n) if ref > 0 else None
+        return out, n
