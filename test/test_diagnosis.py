@@ -12,8 +12,10 @@ import pytest
 
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, SpeedCounter, SteadySignatures, WindowRecord,
-                                         classify, kind_log_likelihood, missing_fraction)
+from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, KIND_CODES, SpeedCounter, SteadySignatures,
+                                         WindowRecord, _fit_kind, classify, kind_log_likelihood, missing_fraction,
+                                         operating_points, point_key)
+from gerotor_twin.twin.health import alarm_records
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
                                                  main as bench_main, model_records)
 
@@ -97,6 +99,10 @@ def test_bad_settings():
         DiagnosisSettings(prior_sd=-1.0)
     with pytest.raises(InputError, match="diagnosis_horizon"):
         DiagnosisSettings(horizon=0)
+    with pytest.raises(InputError, match="diagnosis_relinearise = -1 is invalid"):
+        DiagnosisSettings(relinearise=-1)
+    with pytest.raises(InputError, match="diagnosis_point_pressure_pa = 0"):
+        DiagnosisSettings(point_pressure_pa=0.0)
     with pytest.raises(InputError, match="diagnosis_trend = 'yes'"):
         DiagnosisSettings(trend="yes")
     with pytest.raises(InputError, match="signatures"):
@@ -121,7 +127,7 @@ def test_names_the_fault(plant, kind):
     cfg, sig = plant
     fault, gain = CASES[kind]
     recs = _records(cfg, fault, gain)
-    d = classify(recs, [sig(r) for r in recs])
+    d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
     assert d.kind == kind, (d.kind, d.probability)
     assert d.confidence > 0.9
 
@@ -205,3 +211,71 @@ def test_bench_bad_input(tmp_path, capsys, argv, message):
         bench_main(["-o", str(tmp_path / "b"), *argv])
     assert exc.value.code == 2 and message in capsys.readouterr().err
     assert not (tmp_path / "b").exists()
+
+
+def test_relinearisation_converges_closed_form():
+    """Closed form: a fault whose flow change is quadratic in its size, e_i = θ·(a_i + b_i·θ), fitted with the
+    secant column a + b·θ̂ re-linearised at each fit: the linear fit (step 1) misses θ = 3 and leaves χ² far above
+    n; the fixed point is the true size, reached within the bounded iterations, and the column is asked for at
+    most ``relinearise`` times."""
+    a = np.linspace(1.0, 2.0, 8)
+    b = np.linspace(0.5, -0.2, 8)
+    e, sd, t = 3.0 * (a + 3.0 * b), [1e-4] * 8, np.arange(8.0)
+    calls = []
+
+    def secant(recs, kind, theta, steps):
+        calls.append(theta)
+        return list(a + b * theta), theta
+    s = DiagnosisSettings(prior_sd=10.0, drift_per_sqrt_s=0.0, relinearise=8)
+    sigs = [{"tip_wear": ai + bi} for ai, bi in zip(a, b)]
+    lin = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0)
+    fit = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0, secant)
+    assert abs(lin[1] - 3.0) > 0.1 and lin[3] > 1e3
+    assert fit[1] == pytest.approx(3.0, rel=1e-4) and fit[3] < len(e) and len(calls) <= 8
+    calls.clear()
+    _fit_kind("tip_wear", None, sigs, e, sd, t, DiagnosisSettings(prior_sd=10.0, relinearise=2), 0.0, secant)
+    assert len(calls) == 2
+
+
+def test_large_air_named_after_relinearisation(plant):
+    """Behaviour: 8 % of free air in full at the four points is far from linear in the air fraction: with the
+    signature of +1 % the best fit fails the χ² check (``unknown``); re-linearised at the fitted size it is named
+    air ingress with probability > 0.9.  Re-linearisation is refused for the linear meter gain, within one step
+    and in the direction a wear cannot take."""
+    cfg, sig = plant
+    recs = _records(cfg, {"air_fraction": 0.08})
+    sigs = [sig(r) for r in recs]
+    assert classify(recs, sigs).kind == "unknown"
+    d = classify(recs, sigs, relinearise=sig.relinearised)
+    assert d.kind == "air_ingress" and d.confidence > 0.9, d.probability
+    assert sig.relinearised(recs, "flowmeter_drift", 0.5) is None
+    assert sig.relinearised(recs, "air_ingress", 0.5 / sig.scale["air_ingress"]) is None
+    column, steps = sig.relinearised(recs, "air_ingress", d.parameter["air_ingress"])
+    assert steps > 1.0 and all(c < 0 for c in column)
+    assert sig.relinearised(recs, "tip_wear", -0.05) is None
+
+
+def test_alarm_record_names_closed_form():
+    """Closed form: an alarm's ``fault`` / ``confidence`` are the naming at its last update, ``first_fault`` /
+    ``first_confidence`` at its first, ``named_at_s`` the start of the last unbroken stretch naming ``fault``."""
+    def row(level, kind, p):
+        return {"level": level, "fault": KIND_CODES[kind], "fault_confidence": p}
+    t = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    rows = [row(0, "healthy", 0.9), row(1, "unknown", 1.0), row(1, "tip_wear", 0.5), row(1, "lateral_wear", 0.6),
+            row(1, "lateral_wear", 0.7), row(2, "lateral_wear", 0.8)]
+    warn, error = alarm_records(t, rows)
+    assert warn == {"start_s": 2.0, "end_s": 5.0, "level": "WARN", "fault": "lateral_wear", "confidence": 0.7,
+                    "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
+    assert (error["fault"], error["first_fault"], error["named_at_s"]) == ("lateral_wear", "lateral_wear", 6.0)
+
+
+def test_operating_points_by_tolerance_closed_form():
+    """Closed form: windows on one plateau (603.3, 604.3, 602.3 kPa at 1000 rpm, across a 5 kPa rounding step of
+    the signature cache) are one operating point; 5 against 25 bar, or 1000 against 2500 rpm, are two."""
+    def rec(rpm, p):
+        return WindowRecord(1.0, rpm * math.pi / 30, p, 1e5, None, 1e-4, 1e-4, 1e-4, 1e-6)
+    plateau = [rec(1000.01, 603339.0), rec(1000.01, 604264.0), rec(999.98, 602289.0)]
+    assert len({point_key(r)[:2] for r in plateau}) == 2
+    assert operating_points(plateau, 0.01, 5e4) == 1
+    assert operating_points(plateau + [rec(1000.0, 2.6e6)], 0.01, 5e4) == 2
+    assert operating_points(plateau + [rec(2500.0, 6.0e5)], 0.01, 5e4) == 2

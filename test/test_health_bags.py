@@ -183,7 +183,9 @@ def test_health_command_names_the_fault(wear_run, tmp_path):
     records = json.loads(js.read_text())["alarm_records"]
     assert [a["level"] for a in records] == ["WARN", "ERROR"]
     for a in records:
-        assert set(a) == {"start_s", "end_s", "level", "fault", "confidence"}
+        assert set(a) == {"start_s", "end_s", "level", "fault", "confidence", "first_fault", "first_confidence",
+                          "named_at_s"}
+        assert a["start_s"] <= a["named_at_s"] <= a["end_s"]
         assert a["fault"] in ("tip_wear", "lateral_wear") and 0.3 < a["confidence"] <= 1.0
 
 

@@ -8,7 +8,8 @@ start to its severity at ``--ramp`` s, default the bag's length, 0: a step), run
 
 * per bag, the fault named at the last health update against the true kind (a confusion table);
 * per alarm (``alarm_records``: each WARN / ERROR interval, named at its last update), the fraction naming
-  the true kind, per kind and over all fault bags, and the alarms on healthy bags;
+  the true kind, per kind and over all fault bags, how many of those named it already at their first update,
+  and the alarms on healthy bags;
 * per kind, the detection delay: from the time the fault's apparent loss of volumetric efficiency at the
   health monitor's reference point reaches 2 pt (:func:`truth_crossing`, from the bag's ``fault_series``
   truth) to the first health update at WARN / ERROR naming the true kind.
@@ -96,7 +97,7 @@ def model_windows_table() -> str:
     for pts in (POINTS, POINTS[:2], POINTS[2:], POINTS[1:2]):
         for kind, (fault, gain) in MODEL_CASES.items():
             recs = model_records(cfg, fault, gain, points=pts)
-            d = classify(recs, [sig(r) for r in recs])
+            d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
             other = ", ".join(f"{k} {p:.2f}" for k, p in d.probability.items() if p > 0.05 and k != d.kind)
             lines.append(f"| {', '.join(f'{r}/{b}' for r, b in pts)} | {kind} | {d.kind} ({d.confidence:.2f}) | {other} |")
     return "\n".join(lines)
@@ -248,8 +249,9 @@ def _span(values, fmt: str = "{:.1f}") -> str:
 
 
 def alarm_summary(results) -> dict:
-    """Per true kind and ``all`` (the fault bags): bags, alarms, alarms naming the true kind, their fraction
-    (None without alarms), the kinds the other alarms named, 2-pt crossings [s] and delays [s] (:func:`run_case`),
+    """Per true kind and ``all`` (the fault bags): bags, alarms, alarms naming the true kind at their last update
+    (``alarm_records``' ``fault``), their fraction (None without alarms), alarms naming it already at their first
+    update (``first_right``), the kinds the other alarms named, 2-pt crossings [s] and delays [s] (:func:`run_case`),
     bags whose fault crossed 2 pt but no alarm named it."""
     out = {}
     groups = {k: [r for r in results if r["kind"] == k] for k in CASES}
@@ -258,6 +260,7 @@ def alarm_summary(results) -> dict:
         alarms = [(r["kind"], a) for r in rs for a in r["alarms"]]
         right = sum(a["fault"] == k for k, a in alarms)
         out[kind] = {"bags": len(rs), "alarms": len(alarms), "right": right,
+                     "first_right": sum(a.get("first_fault") == k for k, a in alarms),
                      "fraction": right / len(alarms) if alarms else None,
                      "wrong_named": dict(collections.Counter(str(a["fault"]) for k, a in alarms if a["fault"] != k)),
                      "crossing_s": [r["crossing_s"] for r in rs], "delay_s": [r["delay_s"] for r in rs],
@@ -267,17 +270,19 @@ def alarm_summary(results) -> dict:
 
 def alarm_table(summary: dict) -> str:
     """Markdown table of :func:`alarm_summary`: per kind the alarms naming it, the 2-pt crossings and delays."""
-    lines = ["| true kind | bags | alarms | naming the true kind | other alarms named | loss crosses 2 pt at [s] "
-             "| delay to the first alarm naming it [s] | crossed, never named in an alarm |", "|---" * 8 + "|"]
+    lines = ["| true kind | bags | alarms | naming the true kind at the alarm's end | at its first update "
+             "| other alarms named | loss crosses 2 pt at [s] | delay to the first alarm update naming it [s] "
+             "| crossed, never named in an alarm |", "|---" * 9 + "|"]
     for kind, s in summary.items():
         frac = "–" if s["fraction"] is None else f"{s['right']} ({100 * s['fraction']:.0f} %)"
+        first = "–" if s["fraction"] is None else str(s.get("first_right", "–"))
         other = ", ".join(f"{k} {n}" for k, n in sorted(s["wrong_named"].items())) or "–"
         crossed = [c for c in s["crossing_s"] if c is not None]
         cross = "never" if kind != "all" and not crossed and kind != "healthy" else _span(crossed)
         delay = _span(s["delay_s"], "{:+.1f}")
         if "…" in delay and len([d for d in s["delay_s"] if d is not None]) > 2:
             delay += f" (median {float(np.median([d for d in s['delay_s'] if d is not None])):+.1f})"
-        lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {other} | {cross} | {delay} | {s['missed']} |")
+        lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {first} | {other} | {cross} | {delay} | {s['missed']} |")
     return "\n".join(lines)
 
 

@@ -55,7 +55,9 @@ def cmd_health(args) -> int:
               f"{fault_text(fault_name(r), r.get('fault_confidence'))}")
     alarms = alarm_records(t, rows)
     for a in alarms:
-        print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: {fault_text(a['fault'], a['confidence'])}")
+        first = "" if a["first_fault"] == a["fault"] else (f" (first named {fault_text(a['first_fault'], a['first_confidence'])}"
+                                                            f"; {a['fault']} from {a['named_at_s']:.1f} s)")
+        print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: {fault_text(a['fault'], a['confidence'])}{first}")
     if not alarms:
         print("  no WARN or ERROR")
     if args.json:
@@ -71,5 +73,6 @@ def add_parser(sub) -> None:
     p.add_argument("log", help="node log or run-bag output (MCAP)")
     p.add_argument("--every", type=int, default=1, help="print every N-th update (default 1)")
     p.add_argument("--json", metavar="F", help="write every update and the alarm intervals as JSON (alarm_records: "
-                                               "start_s, end_s, level, fault, confidence per alarm)")
+                                               "start_s, end_s, level, fault, confidence named at the alarm's last "
+                                               "update; first_fault, first_confidence at its first; named_at_s)")
     p.set_defaults(func=cmd_health)

@@ -13,6 +13,11 @@ operating point, finite differences, cached per operating point by :class:`Stead
     ``pressure_offset``  Q(p_delivery − δp) − Q                       (the transducer reads δp high: the loss
                                                                       does not follow the model's Δp dependence)
     ``flowmeter_drift``  q_pred                                       (a gain error, at any operating point)
+A fault far beyond its step need not be linear in its size (8 % of free air fitted with the signature of 1 %
+leaves χ² = 90 against the bound 31.6 on 12 windows at four operating points): with ``relinearise`` > 0 each perturbed kind's column is recomputed with the step set to
+the size fitted (the secant from no fault to the fitted size, :meth:`SteadySignatures.relinearised`) and the
+kind refitted, at most ``relinearise`` times (Gauss–Newton-like fixed-point iteration; stops when the rounded
+size no longer changes).  The likelihood below is then that of the model linearised at the fitted size.
 Each column is divided by its magnitude at the reference point (``reference_rpm``, ``reference_bar``) over
 the theoretical flow there, so every kind's parameter θ is "flow change at the reference point / its
 theoretical flow" [-] (a loss for wear and air ingress when θ > 0), with the same prior and the same drift.
@@ -38,8 +43,8 @@ Likelihood per kind
 Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
     also when the best kind's innovations have χ² > n + ``chi2_z``·√(2n) (no kind explains the
-    residuals), and when a flow kind wins on windows at fewer than two operating points (speed, delivery
-    pressure; :func:`point_key`): there every kind fits the one residual and only the priors differ.  The
+    residuals), and when a flow kind wins on windows at fewer than two operating points (speed within
+    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ.  The
     confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
     samples missing over the horizon (:func:`missing_fraction`); above ``dropout_min`` it is named when
     the flow residuals are explained by ``healthy`` (confidence: that probability).
@@ -54,7 +59,7 @@ import numpy as np
 from gerotor_twin.errors import InputError, check_int, check_ranges
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
-           "kind_log_likelihood", "classify", "point_key", "missing_fraction", "KIND_CODES"]
+           "kind_log_likelihood", "classify", "point_key", "operating_points", "missing_fraction", "KIND_CODES"]
 
 #: fault kinds with a flow signature, in the order of the signature columns
 FLOW_KINDS = ("tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift")
@@ -113,7 +118,10 @@ class DiagnosisSettings:
     factor of ``unknown``); ``chi2_z`` [-]; ``sign_sd`` [-]; ``dropout_min`` [-]; ``suction_sd_pa`` [Pa] (floor of
     the suction pressure's noise) and ``suction_prior_pa`` [Pa] (prior restriction drop at the largest flow);
     finite-difference steps ``rel_step`` [-] (clearance factor), ``air_step`` [-] (free-air fraction),
-    ``pressure_step_pa`` [Pa].
+    ``pressure_step_pa`` [Pa]; ``relinearise`` [-]: at most this many re-linearisations of a kind's signature at
+    its fitted size (0: the signatures at the steps only; module doc); ``point_speed_tol`` [-] (relative) and
+    ``point_pressure_pa`` [Pa]: windows within both of each other are one operating point
+    (:func:`operating_points`; the health monitor passes its steady-window tolerances).
     """
     horizon: int = 30
     prior_sd: float = 0.2
@@ -128,13 +136,18 @@ class DiagnosisSettings:
     rel_step: float = 0.1
     air_step: float = 0.01
     pressure_step_pa: float = 1e5
+    relinearise: int = 2
+    point_speed_tol: float = 0.01
+    point_pressure_pa: float = 5e4
 
     def __post_init__(self):
         check_ranges(self, "diagnosis_", (
             ("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3), ("chi2_z", 0.0, 1e3),
             ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
-            ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6)))
+            ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6),
+            ("point_speed_tol", 1e-4, 1.0), ("point_pressure_pa", 1.0, 1e7)))
         check_int("diagnosis_horizon", self.horizon, 1, 10**5)
+        check_int("diagnosis_relinearise", self.relinearise, 0, 10)
         if not isinstance(self.trend, bool):
             raise InputError("diagnosis_trend", self.trend, "true | false")
 
@@ -179,6 +192,19 @@ def point_key(rec: WindowRecord, rpm_step: float = 10.0, pressure_step_pa: float
     and ``oil_step_k`` [K]: (speed, delivery, suction, oil) in steps (oil None: the reference temperature)."""
     return (round(rec.omega * 30.0 / math.pi / rpm_step), round(rec.p_delivery / pressure_step_pa),
             round(rec.p_suction / pressure_step_pa), None if rec.oil_k is None else round(rec.oil_k / oil_step_k))
+
+
+def operating_points(records, speed_tol: float, pressure_tol_pa: float) -> int:
+    """Number of distinct operating points among ``records`` [-]: a record joins the first point found whose speed is
+    within ``speed_tol`` (relative) [-] and delivery pressure within ``pressure_tol_pa`` [Pa] of the record that
+    opened it, else it opens a new one (windows on one plateau are one point however the rounding of
+    :func:`point_key` falls)."""
+    points: list[WindowRecord] = []
+    for r in records:
+        if not any(abs(r.omega - q.omega) <= speed_tol * max(abs(q.omega), 1.0)
+                   and abs(r.p_delivery - q.p_delivery) <= pressure_tol_pa for q in points):
+            points.append(r)
+    return len(points)
 
 
 def kind_log_likelihood(e, d, sd, t_s, prior_sd: float, drift_per_sqrt_s: float,
@@ -301,7 +327,40 @@ def missing_fraction(records) -> float:
     return max(0.0, 1.0 - got / expected) if expected > 0 else 0.0
 
 
-def classify(records, signatures, settings: DiagnosisSettings | None = None) -> Diagnosis:
+def _fit_kind(kind: str, recs, sigs, e, sd, t, s: DiagnosisSettings, rate_sd: float, relinearise=None):
+    """:func:`kind_log_likelihood` of ``kind`` on the signature columns ``sigs``, re-linearised at the fitted
+    size up to ``s.relinearise`` times by ``relinearise(recs, kind, θ, n)`` (the column at the size fitted with
+    the column of n steps, and its size in steps; or None: keep this one); it stops when the size no longer
+    changes."""
+    d, n = [g[kind] for g in sigs], 1.0
+    fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
+    for _ in range(s.relinearise if relinearise is not None else 0):
+        new = relinearise(recs, kind, fit[1], n)
+        if new is None or new[1] == n:
+            break
+        d, n = new
+        fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
+    return fit
+
+
+def _decide(ll: dict, chi2: dict, recs, s: DiagnosisSettings) -> tuple[str, dict, str]:
+    """The named kind (module doc, "Decision"), the candidates' probabilities and the most likely kind."""
+    names = list(ll)
+    v = np.array([ll[k] for k in names])
+    p = np.exp(v - v.max())
+    p /= p.sum()
+    prob = dict(zip(names, p.tolist()))
+    best = max((k for k in names if k != "unknown"), key=lambda k: ll[k])
+    n = len(recs)
+    kind = best if prob[best] >= prob["unknown"] else "unknown"
+    if chi2[best] > n + s.chi2_z * math.sqrt(2.0 * n):
+        kind = "unknown"
+    if kind in FLOW_KINDS and operating_points(recs, s.point_speed_tol, s.point_pressure_pa) < 2:
+        kind = "unknown"                     # one operating point: every kind fits it, only the priors differ
+    return kind, prob, best
+
+
+def classify(records, signatures, settings: DiagnosisSettings | None = None, relinearise=None) -> Diagnosis:
     """Name the fault that best explains the residuals of the last ``horizon`` windows.
 
     Parameters
@@ -311,6 +370,11 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     signatures : sequence of dict
         Per record, the signature of each of :data:`FLOW_KINDS` [m³/s per unit θ] (:class:`SteadySignatures`).
     settings : DiagnosisSettings, optional
+    relinearise : callable, optional
+        ``relinearise(records, kind, θ, n)``: the kind's signature per record [m³/s per unit θ] re-linearised at
+        the size θ [-] fitted with the column of n finite-difference steps, with its own size in steps, or None
+        where it keeps the one given (:meth:`SteadySignatures.relinearised`).
+        Without it the signatures given are used as they are.
 
     Returns
     -------
@@ -333,8 +397,7 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     span = t[-1] - t[0]
     rate_sd = s.prior_sd / span if s.trend and span > 0 else 0.0
     for kind in FLOW_KINDS:
-        ll_k, th, th_sd, chi2[kind] = kind_log_likelihood(e, [g[kind] for g in sigs], sd, t, s.prior_sd,
-                                                          s.drift_per_sqrt_s, rate_sd)
+        ll_k, th, th_sd, chi2[kind] = _fit_kind(kind, recs, sigs, e, sd, t, s, rate_sd, relinearise)
         theta[kind] = th
         if _SIGN[kind] and th * _SIGN[kind] < -s.sign_sd * th_sd:
             continue                                    # the fault cannot move the flow that way
@@ -342,23 +405,17 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None) -> 
     ll["suction_restriction"], theta["suction_restriction"] = suction_log_ratio(recs, s.suction_sd_pa, s.suction_prior_pa)
     ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
     chi2["suction_restriction"] = chi2["healthy"]
-    names = list(ll)
-    v = np.array([ll[k] for k in names])
-    p = np.exp(v - v.max())
-    p /= p.sum()
-    prob = dict(zip(names, p.tolist()))
-    best = max((k for k in names if k != "unknown"), key=lambda k: ll[k])
-    n = len(recs)
-    kind = best if prob[best] >= prob["unknown"] else "unknown"
-    if chi2[best] > n + s.chi2_z * math.sqrt(2.0 * n):
-        kind = "unknown"
-    if kind in FLOW_KINDS and len({point_key(r)[:2] for r in recs}) < 2:
-        kind = "unknown"                     # one operating point: every kind fits it, only the priors differ
+    kind, prob, best = _decide(ll, chi2, recs, s)
     dropout = missing_fraction(recs)
     if kind == "healthy" and dropout > s.dropout_min:
         kind = "speed_dropout"
     conf = {"speed_dropout": prob["healthy"], "unknown": 1.0 - prob["healthy"]}.get(kind, prob.get(kind))
-    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], n, dropout)
+    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout)
+
+
+#: the kinds whose signature is a finite difference of the steady model: the setting that holds the step
+_STEP = {"tip_wear": "rel_step", "lateral_wear": "rel_step", "air_ingress": "air_step",
+         "pressure_offset": "pressure_step_pa"}
 
 
 class SteadySignatures:
@@ -368,7 +425,8 @@ class SteadySignatures:
     model) runs :func:`~gerotor_twin.model.steady.run_steady` at the window's speed, pressures and oil
     temperature, as configured and with each perturbation; the cache key rounds the operating point to
     ``rpm_step`` [rpm], ``pressure_step_pa`` [Pa] and ``oil_step_k`` [K].  Columns are scaled by their
-    value at the reference point (module doc).
+    value at the reference point (module doc).  :meth:`relinearised` gives a kind's column re-linearised at a
+    fitted fault size (the finite difference taken with that size as its step).
     """
 
     def __init__(self, config, bearing: str = "mobility", settings: DiagnosisSettings | None = None,
@@ -379,45 +437,106 @@ class SteadySignatures:
         self.model = PumpModel(config, bearing)
         self.steps = (rpm_step, pressure_step_pa, oil_step_k)
         self._cache: dict = {}
+        self._sized: dict = {}
         self.p_atm = config.fluid.atmospheric_pa
         rpm, bar = reference
-        ref = self._raw(rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, None)
+        self.reference_op = (rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, None)
+        ref = self._raw(self.reference_op)
+        self._reference = ref["q0"], ref["q_th"]
         self.scale = {k: ref["q_th"] / abs(ref[k]) if ref[k] != 0 else 1.0 for k in FLOW_KINDS}
 
-    def _raw(self, rpm: float, p_d: float, p_s: float, oil_k) -> dict:
-        """Unscaled flow changes [m³/s] per perturbation at one operating point."""
+    def _q(self, op: tuple, kind: str | None = None, size: float = 0.0) -> tuple[float, float]:
+        """Mean delivery and theoretical flow [m³/s] at ``op`` (rpm, delivery and suction pressure [Pa], oil [K]
+        or None) as configured, or with the fault ``kind`` of ``size`` (its step's unit, :data:`_STEP`)."""
         from gerotor_twin.model.clearance_scale import scaled_config, take_config
         from gerotor_twin.model.steady import run_steady
-        s, base = self.settings, self.config
-        bar = (p_d - self.p_atm) / 1e5
-        air0 = base.air.air_fraction
-
-        def q(cfg=None, dp=0.0):
+        rpm, p_d, p_s, oil_k = op
+        base = self.config
+        cfg = {"tip_wear": lambda: scaled_config(base, tip=1.0 + size),
+               "lateral_wear": lambda: scaled_config(base, lateral=1.0 + size),
+               "air_ingress": lambda: scaled_config(base, air_fraction=base.air.air_fraction + size)}.get(kind)
+        dp = size if kind == "pressure_offset" else 0.0
+        if cfg is not None:
+            take_config(self.model, cfg())
+        try:
+            res = run_steady(self.model, rpm, (p_d - self.p_atm - dp) / 1e5, p_suction=p_s, oil_temperature=oil_k)
+        finally:
             if cfg is not None:
-                take_config(self.model, cfg)
-            try:
-                res = run_steady(self.model, rpm, bar - dp / 1e5, p_suction=p_s, oil_temperature=oil_k)
-            finally:
-                if cfg is not None:
-                    take_config(self.model, base)
-            return res.mean_delivery_flow_m3s, res.theoretical_flow_m3s
+                take_config(self.model, base)
+        return res.mean_delivery_flow_m3s, res.theoretical_flow_m3s
 
-        q0, qth = q()
-        h = s.rel_step
-        return {"tip_wear": q(scaled_config(base, tip=1.0 + h))[0] - q0,
-                "lateral_wear": q(scaled_config(base, lateral=1.0 + h))[0] - q0,
-                "air_ingress": q(scaled_config(base, air_fraction=air0 + s.air_step))[0] - q0,
-                "pressure_offset": q(dp=s.pressure_step_pa)[0] - q0,
-                "flowmeter_drift": q0, "q0": q0, "q_th": qth}
+    def _raw(self, op: tuple) -> dict:
+        """Unscaled flow changes [m³/s] per perturbation (of its step) at one operating point."""
+        q0, qth = self._q(op)
+        out = {k: self._q(op, k, getattr(self.settings, step))[0] - q0 for k, step in _STEP.items()}
+        out.update(flowmeter_drift=q0, q0=q0, q_th=qth)
+        return out
+
+    def _op(self, key: tuple) -> tuple:
+        """The rounded operating point of a cache key: (rpm, delivery and suction pressure [Pa], oil [K] or None)."""
+        rs, ps, ts = self.steps
+        return key[0] * rs, key[1] * ps, key[2] * ps, None if key[3] is None else key[3] * ts
+
+    def _point(self, rec: WindowRecord) -> tuple[tuple, dict]:
+        """The record's cache key and the unscaled flow changes at its rounded operating point."""
+        key = point_key(rec, *self.steps)
+        raw = self._cache.get(key)
+        if raw is None:
+            raw = self._cache[key] = self._raw(self._op(key))
+        return key, raw
 
     def __call__(self, rec: WindowRecord) -> dict:
         """Signature of each of :data:`FLOW_KINDS` at the record's operating point [m³/s per unit θ]."""
-        rs, ps, ts = self.steps
-        key = point_key(rec, rs, ps, ts)
-        raw = self._cache.get(key)
-        if raw is None:
-            raw = self._cache[key] = self._raw(key[0] * rs, key[1] * ps, key[2] * ps,
-                                               None if key[3] is None else key[3] * ts)
+        raw = self._point(rec)[1]
         out = {k: raw[k] * self.scale[k] for k in FLOW_KINDS}
         out["flowmeter_drift"] = rec.q_pred * self.scale["flowmeter_drift"]
         return out
+
+    def _change(self, key: tuple, q0: float, kind: str, n: float) -> float:
+        """Flow change [m³/s] at the cache key's operating point (``"reference"``: the reference point) with the
+        fault ``kind`` of ``n`` finite-difference steps (cached)."""
+        change = self._sized.get((key, kind, n))
+        if change is None:
+            op = self.reference_op if key == "reference" else self._op(key)
+            change = self._sized[(key, kind, n)] = self._q(op, kind, n * getattr(self.settings, _STEP[kind]))[0] - q0
+        return change
+
+    def relinearised(self, records, kind: str, theta: float, steps: float = 1.0) -> tuple[list[float], float] | None:
+        """The signature of ``kind`` per record [m³/s per unit θ] re-linearised at the fitted size θ [-].
+
+        θ is the flow change at the reference point over its theoretical flow; fitted with the column taken at
+        ``steps`` (n, in finite-difference steps; 1: the linear signature), it corresponds to n' = θ / c(n)
+        steps, c(n) the reference point's |flow change| / theoretical flow per step at n.  The column becomes
+        the secant from no fault to n' steps, (Q(n') − Q) at each record's operating point scaled by
+        theoretical flow / |Q(n') − Q| at the reference point, so that θ keeps its meaning (and its prior).
+        n' is rounded to a quarter octave (2^(j/4)) so that nearby fits share the cached steady runs.  None —
+        keep the linear column — for the flow-meter gain (linear), within one step (|n'| ≤ 1: the finite
+        difference interpolates there), in the direction the fault cannot have (:data:`_SIGN`), beyond a loss of
+        the whole theoretical flow (|θ| > 1), and where the steady model refuses the size (outside the
+        config's ranges).
+
+        Returns
+        -------
+        tuple or None
+            The column per record and n'.
+        """
+        if kind not in _STEP or not abs(theta) <= 1.0 or (_SIGN[kind] and theta * _SIGN[kind] < 0):
+            return None
+        q0_ref, qth_ref = self._reference
+        try:
+            per_step = (abs(self._change("reference", q0_ref, kind, steps)) / abs(steps) / qth_ref
+                        if steps != 1.0 else 1.0 / self.scale[kind])
+            n = theta / per_step
+            if not abs(n) > 1.0:
+                return None
+            n = math.copysign(2.0 ** (round(4.0 * math.log2(abs(n))) / 4.0), n)
+            ref = abs(self._change("reference", q0_ref, kind, n))
+            if not ref > 0.0:
+                return None                     # the fault moves no flow at the reference point: θ has no scale
+            out = []
+            for rec in records:
+                key, raw = self._point(rec)
+                out.append(self._change(key, raw["q0"], kind, n) / ref * qth_ref)
+        except InputError:
+            return None
+        return out, n

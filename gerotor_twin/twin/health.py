@@ -57,7 +57,7 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, SpeedCounter, SteadySignatures, WindowRecord, classify
+from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
@@ -93,15 +93,38 @@ def alarm_intervals(t, rows: list[dict]) -> list[tuple[str, float, float]]:
 
 
 def alarm_records(t, rows: list[dict]) -> list[dict]:
-    """The alarm intervals of :func:`alarm_intervals` as ``{"start_s", "end_s", "level", "fault", "confidence"}``:
-    the fault the classifier named at the interval's last update (:data:`~.diagnosis.KINDS`; None when the
-    log carries no diagnosis or it was not classified) and its probability [-] (None alike)."""
+    """The alarm intervals of :func:`alarm_intervals` with the fault named during each.
+
+    The classifier names a kind at every update, and within one alarm the naming may change as evidence
+    grows (a second operating point seen, the fault grown).  Per interval: ``start_s``, ``end_s`` [s],
+    ``level``; ``fault`` and ``confidence``: the kind named at the interval's *last* update and its
+    probability [-] (the most evidence the alarm had); ``first_fault`` and ``first_confidence``: the
+    naming at its first update; ``named_at_s`` [s]: the first update from which ``fault`` was named without
+    interruption to the interval's end.  Kinds of :data:`~.diagnosis.KINDS`; None when the log carries no
+    diagnosis or the update was not classified.
+
+    Parameters
+    ----------
+    t : sequence of float
+        Time of each health update [s].
+    rows : list of dict
+        The updates' fields (:data:`HEALTH_FIELDS`).
+    """
+    def named(r):
+        fault, conf = fault_name(r), float(r.get("fault_confidence", math.nan))
+        return (None, None) if fault == "-" else (fault, conf if math.isfinite(conf) else None)
+
+    t = [float(ti) for ti in t]
     out = []
     for name, a, b in alarm_intervals(t, rows):
-        r = rows[next(i for i, ti in enumerate(t) if float(ti) == b)]
-        fault, conf = fault_name(r), float(r.get("fault_confidence", math.nan))
-        out.append({"start_s": a, "end_s": b, "level": name, "fault": None if fault == "-" else fault,
-                    "confidence": conf if fault != "-" and math.isfinite(conf) else None})
+        i0 = t.index(a)
+        i1 = next(i for i in range(i0, len(t)) if t[i] == b)
+        (fault, conf), (first, first_conf) = named(rows[i1]), named(rows[i0])
+        i = i1
+        while i > i0 and named(rows[i - 1])[0] == fault:
+            i -= 1
+        out.append({"start_s": a, "end_s": b, "level": name, "fault": fault, "confidence": conf,
+                    "first_fault": first, "first_confidence": first_conf, "named_at_s": t[i]})
     return out
 
 
@@ -351,8 +374,10 @@ class HealthMonitor:
         s = self.settings
         try:
             if self._signature_of is None:
-                self._signature_of = SteadySignatures(self.base_config, getattr(self.model, "bearing_name", "mobility"),
-                                                      reference=(s.reference_rpm, s.reference_bar))
+                self._signature_of = SteadySignatures(
+                    self.base_config, getattr(self.model, "bearing_name", "mobility"),
+                    DiagnosisSettings(point_speed_tol=s.speed_tol, point_pressure_pa=s.pressure_tol_pa),
+                    reference=(s.reference_rpm, s.reference_bar))
             signature = self._signature_of(rec)
         except InputError:
             return                  # outside the pump's range (a steady model cannot run there): not classified
@@ -360,7 +385,8 @@ class HealthMonitor:
         self.signatures.append(signature)
         keep = self._signature_of.settings.horizon
         del self.windows[:-keep], self.signatures[:-keep]
-        self.diagnosis = classify(self.windows, self.signatures, self._signature_of.settings)
+        self.diagnosis = classify(self.windows, self.signatures, self._signature_of.settings,
+                                  relinearise=self._signature_of.relinearised)
 
     def _adapt(self, k: float) -> None:
         from gerotor_twin.model.clearance_scale import scale_clearances
