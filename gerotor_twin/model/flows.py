@@ -41,7 +41,7 @@ from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICT
                      FL_SUCTION_DELIVERY, N_JAC_EXTRA)
 
 __all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
-           "area_derivative", "closing_ports", "closing_share",
+           "area_derivative", "closing_ports", "closing_share", "time_to_close",
            "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV",
            "J_FT", "J_CS", "J_TCS", "J_CD", "J_CDN", "J_TCD", "N_JAC_EXTRA"]
 
@@ -51,8 +51,7 @@ G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # W
 #: Columns of Workspace.jac after ∂f/∂y (N+1 columns), as offsets from N+1: ∂f/∂t without the closing ports,
 #: then per row j the closing ports' shares of it and the time until they close (:func:`closing_ports`,
 #: :func:`closing_share`): suction port → chamber row [1/s²], its time to close [s]; delivery port → chamber
-#: row, → delivery row, its time to close (> 0), or −the time since it opened (< 0) if that was within a
-#: quarter of the horizon (one output step: the stepper's tolerance only), else 0.
+#: row, → delivery row, its time to close [s] (0: not closing within the horizon).
 J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(N_JAC_EXTRA)
 
 
@@ -269,7 +268,7 @@ def assemble(km, op, ws, f, jac, want_jac):
 
 
 @njit(inline="always")
-def _time_to_close(area, slope, omega, horizon):
+def time_to_close(area, slope, omega, horizon):
     """Time [s] until a port of open area [m²] falling at slope [m²/rad] closes, if within ``horizon`` [s];
     else 0."""
     if area > 0.0 and slope < 0.0 and area < -slope * omega * horizon:
@@ -281,11 +280,9 @@ def _time_to_close(area, slope, omega, horizon):
 def closing_ports(pc, op, p, rho, geo, jac, horizon):
     """Move the shares of the ports that close within ``horizon`` [s] out of ∂f/∂t (``jac`` after
     :func:`rhs` with the Jacobian) into their own columns, with their time to close (``J_*``), for
-    :func:`closing_share` (and the stepper's tighter tolerance on a chamber whose delivery port closes).
-    The time to close is the linear extrapolation A / (−ω dA/dθ); ``horizon`` must be at least the
-    longest sub-step (the stepper passes 4 output steps).  A delivery port that opened within a quarter
-    of ``horizon`` gets −its age instead (no share moved: for the stepper's tolerance only; the chamber
-    refilled from the delivery kidney through it spikes too).
+    :func:`closing_share`.  The time to close is the linear extrapolation A / (−ω dA/dθ) (:func:`time_to_close`);
+    ``horizon`` must be at least the longest sub-step (the stepper passes 4 output steps).  What the step
+    control makes of closing and opening ports is its own (:func:`.step_control.port_event`).
 
     A port is closing where its open area falls (table slope < 0).  Its share is recomputed from the
     first stage's pressures, densities and chamber geometry (``Workspace.p``, ``rho``, ``geo``):
@@ -299,7 +296,7 @@ def closing_ports(pc, op, p, rho, geo, jac, horizon):
     count = 0
     scale_n = w / pc.line_volume if pc.restriction else w
     for j in range(n):
-        tc = _time_to_close(geo[j, G_AS], geo[j, G_DAS], w, horizon)
+        tc = time_to_close(geo[j, G_AS], geo[j, G_DAS], w, horizon)
         jac[j, n1 + J_TCS] = tc
         if tc > 0.0:
             count += 1
@@ -311,9 +308,7 @@ def closing_ports(pc, op, p, rho, geo, jac, horizon):
             c = r * area_derivative(q, dq, dp, geo[j, G_AS]) * geo[j, G_DAS] * inv
             jac[j, n1 + J_CS] = c
             jac[j, n1 + J_FT] -= c
-        tc = _time_to_close(geo[j, G_AD], geo[j, G_DAD], w, horizon)
-        if tc == 0.0:      # opened within one output step? (time to close, backwards in time, = its age)
-            tc = -_time_to_close(geo[j, G_AD], -geo[j, G_DAD], w, 0.25 * horizon)
+        tc = time_to_close(geo[j, G_AD], geo[j, G_DAD], w, horizon)
         jac[j, n1 + J_TCD] = tc
         if tc > 0.0:
             count += 1

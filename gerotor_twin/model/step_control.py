@@ -30,16 +30,17 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
-from .flows import J_TCD
+from .flows import G_AD, G_DAD, time_to_close
 from .params import CT_RANGE, ERROR_PRESSURE
 
-__all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "error_scale", "update_range", "error_weights", "error_norm",
-           "step_factor"]
+__all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "OPENED_WINDOW", "error_scale", "update_range", "port_event",
+           "error_weights", "error_norm", "step_factor"]
 
 SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
 FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
 FACTOR_MAX = 4.0    #: largest factor per sub-step [-]
 _TINY_NORM = 1e-8   #: below this the error norm says nothing about the step: grow by FACTOR_MAX
+OPENED_WINDOW = 0.25  #: a delivery port counts as just opened within this share of the closing horizon [-]
 
 
 @njit(inline="always")
@@ -71,16 +72,25 @@ def update_range(ctrl, peak, pres, n, fade):
 
 
 @njit(inline="always")
-def error_weights(km, op, ws):
+def port_event(area, slope, omega, horizon):
+    """True if a chamber's delivery port, open area [m²] changing at ``slope`` [m²/rad], closes within
+    ``horizon`` [s] at ω = ``omega`` [rad/s], or opened within :data:`OPENED_WINDOW` of it (its age: the time to
+    close backwards in time): the events the embedded error estimate under-reads (:func:`error_weights`)."""
+    return (time_to_close(area, slope, omega, horizon) > 0.0
+            or time_to_close(area, -slope, omega, OPENED_WINDOW * horizon) > 0.0)
+
+
+@njit(inline="always")
+def error_weights(km, op, ws, horizon):
     """Per-volume weights ``ws.wt`` [-] of :func:`error_norm`, at the first stage of a sub-step.
 
-    Pressure measure: w_i = β_i / (tol·Δp_ref) (:func:`error_scale`), at least 1/``log_density_tolerance``.  A chamber whose
-    delivery port closes or has just opened (``J_TCD`` ≠ 0, :func:`.flows.closing_ports`) is held to
-    ``closing_tolerance``·tol and weighed with max(β_i, β(p_d)): an error δ in its ln ρ, made while
-    it is still near suction pressure where β_i is small, becomes a pressure error β(p_d)·δ once the
-    delivery kidney has filled it (a just-opened chamber at 1 bar: β_i ≈ 0.1 GPa against 1.5 GPa).
-    Log-density measure: w_i = 1/tol.  The delivered-volume quadrature (imposed delivery pressure) has
-    weight 0.
+    Pressure measure: w_i = β_i / (tol·Δp_ref) (:func:`error_scale`), at least 1/``log_density_tolerance``.  A
+    chamber whose delivery port closes within ``horizon`` [s] or has just opened (:func:`port_event`, from the
+    first stage's port areas and slopes in ``ws.geo``) is held to ``closing_tolerance``·tol and weighed with
+    max(β_i, β(p_d)): an error δ in its ln ρ, made while it is still near suction pressure where β_i is small,
+    becomes a pressure error β(p_d)·δ once the delivery kidney has filled it (a just-opened chamber at 1 bar:
+    β_i ≈ 0.1 GPa against 1.5 GPa).  Log-density measure: w_i = 1/tol.  The delivered-volume quadrature
+    (imposed delivery pressure) has weight 0.
     """
     pc = km.pc
     for i in range(pc.n + 1):
@@ -89,8 +99,8 @@ def error_weights(km, op, ws):
         elif pc.error_measure == ERROR_PRESSURE:                   # dp = β dy, relative to Δp; mass where β is small
             tol = pc.tolerance
             beta = ws.beta[i]
-            if i < pc.n and ws.jac[i, pc.n + 1 + J_TCD] != 0.0:    # delivery port closing or just opened:
-                tol *= pc.closing_tolerance                        # the spikes (flows.closing_ports)
+            if i < pc.n and port_event(ws.geo[i, G_AD], ws.geo[i, G_DAD], op.omega, horizon):
+                tol *= pc.closing_tolerance                        # the spikes (docs/numerics.md)
                 beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
             ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
         else:
