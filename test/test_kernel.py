@@ -301,6 +301,31 @@ def test_pressure_of_inverts_the_exact_state_equation(cfg):
     assert kernel_model  # the structure builder is importable on its own
 
 
+def test_hermite_coefficients():
+    """Closed form: the table's per-interval cubic interpolates p and dp/ds at the nodes and reproduces any cubic
+    p(s) exactly (a Hermite cubic is exact for cubics), p and dp/ds, with the table's lookup (``state_of``)."""
+    from gerotor_twin.hydraulics.state_equation import MIXTURE, StateEquation, hermite_coefficients, state_of
+    s_lo, s_hi, n = -0.2, 0.05, 11
+    nodes = np.linspace(s_lo, s_hi, n)
+
+    def cubic(s):
+        return 2e5 + 3e7 * s - 4e8 * s ** 2 + 9e9 * s ** 3, 3e7 - 8e8 * s + 27e9 * s ** 2
+
+    p, dp = cubic(nodes)
+    c = hermite_coefficients(p, dp, (s_hi - s_lo) / (n - 1))
+    assert c.shape == (n - 1, 4)
+    assert np.allclose(c[:, 0], p[:-1], rtol=1e-15)                                     # t = 0
+    assert np.allclose(c.sum(axis=1), p[1:], rtol=1e-12)                                # t = 1
+    eos = StateEquation(beta_liquid=1.5e9, ratio=1.0, p_atm=1e5, band=0.0, p_vap=1e3, p_lo=1e3, p_hi=5e7,
+                        s_lo=s_lo, s_hi=s_hi, band_c=c, inv_ds=(n - 1) / (s_hi - s_lo), kind=MIXTURE,
+                        air_fraction=1e-3, polytropic_index=1.0)
+    for s in np.linspace(s_lo, s_hi, 97):
+        want_p, want_dp = cubic(s)
+        got_p, got_dp = state_of(s, eos)
+        assert got_p == pytest.approx(want_p, rel=1e-12, abs=1e-6)
+        assert got_dp == pytest.approx(want_dp, rel=1e-9)
+
+
 _NOJIT = r"""
 import json, math, sys
 from gerotor_twin.config import load_config

@@ -53,7 +53,7 @@ from .mixture import AirContent, mixture_bulk_modulus, mixture_log_density, mixt
 
 __all__ = ["exp_small", "StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
            "BAND_NODES", "MIXTURE_NODES", "MIXTURE_MAX_NODES", "PAPER", "MIXTURE", "FLUID_MODELS", "convert_log_density",
-           "with_liquid_modulus"]
+           "with_liquid_modulus", "hermite_coefficients"]
 
 BAND_NODES = 1024   #: nodes of the Hermite table of p(s) inside the switch band (paper)
 MIXTURE_NODES = 2048          #: nodes of the Hermite table of p(s) of the mixture
@@ -83,8 +83,8 @@ class StateEquation(NamedTuple):
     p_hi: float             #: p_atm + band/2 (paper); top of the p(s) table (mixture) [Pa]
     s_lo: float             #: ln(ρ/ρ₀) at the start of the p(s) table [-]
     s_hi: float             #: ln(ρ/ρ₀) at its end [-]
-    band_p: np.ndarray      #: pressure at nodes uniform in s over [s_lo, s_hi] [Pa]
-    band_dp: np.ndarray     #: dp/ds = β at those nodes [Pa]
+    band_c: np.ndarray      #: the table's cubic per interval of s, (nodes − 1, 4) [Pa] (:func:`hermite_coefficients`)
+    inv_ds: float           #: 1 / the table's node spacing in s [-]
     kind: int = PAPER       #: PAPER or MIXTURE
     air_fraction: float = 0.0       #: α₀, free air volume fraction at p_atm [-] (mixture)
     polytropic_index: float = 1.0   #: n of the air [-] (mixture)
@@ -149,20 +149,44 @@ def pressure_of(s, eos):
     return _hermite(s, eos)[0]
 
 
+def hermite_coefficients(band_p: np.ndarray, band_dp: np.ndarray, ds: float) -> np.ndarray:
+    r"""The cubic Hermite table of p(s) through nodes uniform in s as one cubic per interval, (nodes − 1, 4) [Pa].
+
+    Parameters
+    ----------
+    band_p : ndarray
+        p at the nodes [Pa].
+    band_dp : ndarray
+        dp/ds = β at the nodes [Pa].
+    ds : float
+        The node spacing in s [-].
+
+    Notes
+    -----
+    On interval i, with t = (s − s_i)/Δs ∈ [0, 1], m = Δs·dp/ds at its two ends, the Hermite cubic is
+
+    .. math::
+        p = c_0 + t\,(c_1 + t\,(c_2 + t\,c_3)),\quad c_0 = p_i,\ c_1 = m_i,\
+        c_2 = 3(p_{i+1} - p_i) - 2m_i - m_{i+1},\ c_3 = 2(p_i - p_{i+1}) + m_i + m_{i+1}
+
+    (the Hermite basis functions collected in t): one row of four numbers per lookup and Horner's rule, in
+    place of two rows of two tables and the basis polynomials.  The same cubic up to rounding.
+    """
+    p0, p1 = band_p[:-1], band_p[1:]
+    m0, m1 = ds * band_dp[:-1], ds * band_dp[1:]
+    return np.ascontiguousarray(np.stack([p0, m0, 3.0 * (p1 - p0) - 2.0 * m0 - m1, 2.0 * (p0 - p1) + m0 + m1],
+                                         axis=1))
+
+
 @njit(inline="always")
 def _hermite(s, eos):
-    """(p, dp/ds) [Pa] of the cubic Hermite table of ``eos`` at s in [s_lo, s_hi]."""
-    n = eos.band_p.shape[0]
-    ds = (eos.s_hi - eos.s_lo) / (n - 1)
-    u = (s - eos.s_lo) / ds
-    i = min(max(int(u), 0), n - 2)
+    """(p, dp/ds) [Pa] of the cubic Hermite table of ``eos`` at s in [s_lo, s_hi] (:func:`hermite_coefficients`)."""
+    u = (s - eos.s_lo) * eos.inv_ds
+    i = min(max(int(u), 0), eos.band_c.shape[0] - 1)
     t = u - i
-    t2 = t * t
-    t3 = t2 * t
-    p0, p1 = eos.band_p[i], eos.band_p[i + 1]
-    m0, m1 = ds * eos.band_dp[i], ds * eos.band_dp[i + 1]
-    p = (2.0 * t3 - 3.0 * t2 + 1.0) * p0 + (t3 - 2.0 * t2 + t) * m0 + (3.0 * t2 - 2.0 * t3) * p1 + (t3 - t2) * m1
-    dp = ((6.0 * t2 - 6.0 * t) * (p0 - p1) + (3.0 * t2 - 4.0 * t + 1.0) * m0 + (3.0 * t2 - 2.0 * t) * m1) / ds
+    c1, c2, c3 = eos.band_c[i, 1], eos.band_c[i, 2], eos.band_c[i, 3]
+    p = eos.band_c[i, 0] + t * (c1 + t * (c2 + t * c3))
+    dp = (c1 + t * (2.0 * c2 + 3.0 * t * c3)) * eos.inv_ds
     return p, dp
 
 
@@ -237,7 +261,9 @@ def state_equation(fluid: Fluid, model: str = "paper", air: AirContent | None = 
     band_dp[-1] = bulk_modulus(p_hi, *args)[0]
     return StateEquation(beta_liquid=fluid.bulk_modulus_pa, ratio=fluid.cavitation_ratio,
                          p_atm=fluid.atmospheric_pa, band=fluid.switch_band_pa, p_vap=fluid.vapour_pressure_pa,
-                         p_lo=p_lo, p_hi=p_hi, s_lo=s_lo, s_hi=s_hi, band_p=band_p, band_dp=band_dp)
+                         p_lo=p_lo, p_hi=p_hi, s_lo=s_lo, s_hi=s_hi,
+                         band_c=hermite_coefficients(band_p, band_dp, (s_hi - s_lo) / (BAND_NODES - 1)),
+                         inv_ds=(BAND_NODES - 1) / (s_hi - s_lo))
 
 
 def _mixture_equation(fluid: Fluid, air: AirContent) -> StateEquation:
@@ -263,8 +289,9 @@ def _mixture_equation_of(beta_l: float, alpha0: float, n: float, p_vap: float, p
     p0, pv = p_atm, p_vap
     p_cav = min(p0, pv + alpha0 * (p0 - pv) / CAVITATION_GAS_SHARE)
     return StateEquation(beta_liquid=beta_l, ratio=1.0, p_atm=p0, band=0.0, p_vap=pv,
-                         p_lo=p_cav, p_hi=MIXTURE_TABLE_HI_PA, s_lo=s_lo, s_hi=s_hi, band_p=p_tab,
-                         band_dp=dp_tab, kind=MIXTURE, air_fraction=alpha0, polytropic_index=n)
+                         p_lo=p_cav, p_hi=MIXTURE_TABLE_HI_PA, s_lo=s_lo, s_hi=s_hi,
+                         band_c=hermite_coefficients(p_tab, dp_tab, (s_hi - s_lo) / (nodes - 1)),
+                         inv_ds=(nodes - 1) / (s_hi - s_lo), kind=MIXTURE, air_fraction=alpha0, polytropic_index=n)
 
 
 def with_liquid_modulus(eos: StateEquation, fluid: Fluid, model: str, air: AirContent | None) -> StateEquation:
@@ -282,7 +309,7 @@ def with_liquid_modulus(eos: StateEquation, fluid: Fluid, model: str, air: AirCo
         return state_equation(fluid, model, air)
     k = fluid.bulk_modulus_pa / eos.beta_liquid
     return eos._replace(beta_liquid=fluid.bulk_modulus_pa, s_lo=eos.s_lo / k, s_hi=eos.s_hi / k,
-                        band_dp=eos.band_dp * k)
+                        inv_ds=eos.inv_ds * k)
 
 
 def convert_log_density(y: np.ndarray, old: StateEquation, new: StateEquation) -> np.ndarray:
