@@ -68,7 +68,7 @@ from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
-from .step_control import error_norm, error_weights, step_factor, update_range
+from .step_control import embedded_error, error_norm, error_weights, step_factor, update_range
 from .tooth_constraint import pull_back_along
 from .volumes import move_volumes
 
@@ -228,7 +228,7 @@ def ros2_step(y, th, h, km, op, ws):
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
     for i in range(n1):
         ws.ynew[i] = y[i] + 1.5 * h * ws.k1[i] + 0.5 * h * ws.k2[i]
-        ws.err[i] = 0.5 * h * (ws.k1[i] + ws.k2[i])        # against the embedded first-order y + h k1
+    embedded_error(h, ws.k1, ws.k2, ws.err)
     return error_norm(ws.err, ws.wt)
 
 

@@ -1,5 +1,5 @@
-r"""Sub-step control of the ROS2 stepper (:mod:`.kernel`): the error scale, the error weights, the error norm
-and the step-size factor, each a few named lines.
+r"""Sub-step control of the ROS2 stepper (:mod:`.kernel`): the error estimate, the error scale, the error weights, the
+error norm and the step-size factor, each a few named lines.
 
 A sub-step of size h is accepted when its error norm is at most 1,
 
@@ -34,7 +34,7 @@ from .flows import G_AD, G_DAD, time_to_close
 from .params import CT_RANGE, ERROR_PRESSURE
 
 __all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "OPENED_WINDOW", "error_scale", "update_range", "port_event",
-           "error_weights", "error_norm", "step_factor"]
+           "error_weights", "embedded_error", "error_norm", "step_factor"]
 
 SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
 FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
@@ -105,6 +105,21 @@ def error_weights(km, op, ws, horizon):
             ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
+
+
+@njit(inline="always")
+def embedded_error(h, k1, k2, err):
+    r"""The local error estimate of a ROS2 sub-step of h [s] with stages ``k1``, ``k2`` [1/s] into ``err`` [-]:
+
+    .. math:: e = y_{n+1} - \hat y_{n+1} = \tfrac12 h (k_1 + k_2),\qquad
+              y_{n+1} = y_n + \tfrac32 h k_1 + \tfrac12 h k_2,\quad \hat y_{n+1} = y_n + h k_1
+
+    ROS2 against its embedded first-order solution [2]; it estimates the first-order solution's error
+    (O(h²)), hence the exponent 1/(q̂ + 1) = 1/2 of :func:`step_factor`, and the second-order solution is
+    propagated (local extrapolation).
+    """
+    for i in range(err.shape[0]):
+        err[i] = 0.5 * h * (k1[i] + k2[i])
 
 
 @njit(inline="always")
