@@ -115,6 +115,29 @@ def test_advance_is_resumable(fixed_model):
     assert np.allclose(a.pressures, b.pressures, rtol=1e-6)
 
 
+def test_advance_depends_on_the_state_alone(cfg):
+    """Behaviour: the state carries everything a run continues from, so a model that advanced another state in
+    between (a start-up or health check on the live model) continues exactly as one that did not.  The mobility
+    model with displaced volumes: the squeeze velocity of the gear's last move is part of the state
+    (``PumpState.squeeze_velocity``); kept in the workspace instead, the other state's run changed the next
+    step's chamber pressures by up to 0.75 bar."""
+    def inputs(rpm, bar):
+        return Inputs(rpm * math.pi / 30, cfg.boundary.suction_pressure_pa,
+                      cfg.fluid.atmospheric_pa + bar * 1e5)
+    ia, ib = inputs(3000, 27.5), inputs(1000, 5.0)
+    alone, shared = PumpModel(cfg, "mobility"), PumpModel(cfg, "mobility")
+    assert alone.kernel.tab.volumes_follow_gear
+    a1, _ = alone.advance(alone.initial_state(ia), 0.01, ia)
+    a2, out_alone = alone.advance(a1, 0.01, ia)
+    s1, _ = shared.advance(shared.initial_state(ia), 0.01, ia)
+    shared.advance(shared.initial_state(ib), 0.01, ib)                 # another state on the same model
+    s2, out_shared = shared.advance(s1, 0.01, ia)
+    assert np.any(a1.squeeze_velocity != 0.0)
+    assert np.array_equal(out_alone.chamber_pressures, out_shared.chamber_pressures)
+    assert np.array_equal(a2.eccentricity, s2.eccentricity)
+    assert np.array_equal(a2.squeeze_velocity, s2.squeeze_velocity)
+
+
 @pytest.mark.parametrize("inp,field", [
     (Inputs(float("nan"), 101325.0, 2e6), "shaft_speed"),
     (Inputs(-1.0, 101325.0, 2e6), "shaft_speed"),

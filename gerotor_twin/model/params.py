@@ -156,7 +156,8 @@ class Workspace(NamedTuple):
                             #: why the last output step was abandoned (kernel.STEP_*);
                             #: the sub-step attempts an output step may take (numerics.max_substep_attempts)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
-                            #: velocity of its last move [m/s] (:mod:`.volumes`)
+                            #: velocity of its last move [m/s] (:mod:`.volumes`), set from the state at each
+                            #: ``advance`` (``PumpState.eccentricity``, ``squeeze_velocity``) and returned in it
     peak: np.ndarray        #: (N,) max of each chamber's ln ρ over the current output step so far [-]
     gear: np.ndarray        #: (N_GEAR,) the outer gear's velocity in the stages (:mod:`.gear_coupling`, ``GC_*``)
     gear_rows: np.ndarray   #: (N, N_ROWS) per chamber ∂V/∂e [m³/m] and ∂F/∂p [N/Pa] of the coupled load, their θ-slopes (gear_coupling)

@@ -223,6 +223,9 @@ class PumpModel:
         ws.ctrl[K.CT_SUBSTEP] = state.substep
         ws.ctrl[K.CT_RANGE] = state.pressure_range
         ws.ctrl[K.CT_BOUND] = self.config.numerics.max_substep_attempts
+        if self.kernel.tab.volumes_follow_gear:        # the volumes where the state's gear is, squeezed as it moved
+            ws.disp[0], ws.disp[1] = e[0], e[1]
+            ws.disp[2], ws.disp[3] = state.squeeze_velocity[0], state.squeeze_velocity[1]
         if n:
             if self._move == K.MOVE_EXTERNAL:
                 with self._first_use():
@@ -250,7 +253,8 @@ class PumpModel:
         new = PumpState(t=t, theta=theta, log_density=y, pressures=pres, eccentricity=e, counters=counters,
                         volumes=vols, swept_angle=swept,
                         substep=float(ws.ctrl[K.CT_SUBSTEP]),
-                        pressure_range=float(ws.ctrl[K.CT_RANGE]))
+                        pressure_range=float(ws.ctrl[K.CT_RANGE]),
+                        squeeze_velocity=ws.disp[2:4].copy() if n else state.squeeze_velocity.copy())
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
     def _first_use(self):

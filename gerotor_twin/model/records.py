@@ -58,6 +58,9 @@ class PumpState:
     #: the chamber pressures' recent range, highest peak − lowest pressure, fading by 1/e per revolution [Pa]
     #: (the scale of the sub-step error control: :func:`.step_control.update_range`)
     pressure_range: float = 0.0
+    #: (2,) velocity of the outer gear's last move that the chamber volumes have taken up, whose squeeze the next
+    #: output step applies (:func:`.volumes.move_volumes`; zero with nominal volumes) [m/s]
+    squeeze_velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     @property
     def counts(self) -> dict:
