@@ -53,7 +53,7 @@ from .mixture import AirContent, mixture_bulk_modulus, mixture_log_density, mixt
 
 __all__ = ["exp_small", "StateEquation", "state_equation", "pressure_of", "state_of", "log_density_of", "bulk_modulus_of",
            "BAND_NODES", "MIXTURE_NODES", "MIXTURE_MAX_NODES", "PAPER", "MIXTURE", "FLUID_MODELS", "convert_log_density",
-           "with_liquid_modulus", "hermite_coefficients"]
+           "with_liquid_modulus", "hermite_coefficients", "port_states"]
 
 BAND_NODES = 1024   #: nodes of the Hermite table of p(s) inside the switch band (paper)
 MIXTURE_NODES = 2048          #: nodes of the Hermite table of p(s) of the mixture
@@ -310,6 +310,15 @@ def with_liquid_modulus(eos: StateEquation, fluid: Fluid, model: str, air: AirCo
     k = fluid.bulk_modulus_pa / eos.beta_liquid
     return eos._replace(beta_liquid=fluid.bulk_modulus_pa, s_lo=eos.s_lo / k, s_hi=eos.s_hi / k,
                         inv_ds=eos.inv_ds * k)
+
+
+@njit
+def port_states(p_s, p_d, eos):
+    """(ln(ρ(p_s)/ρ₀), ln(ρ(p_d)/ρ₀), β(p_d) [Pa], ρ(p_d)/ρ₀) of the suction and delivery pressures p_s, p_d [Pa]:
+    what each ``advance`` call derives from its inputs (:func:`gerotor_twin.model.params.operating`), in one
+    compiled call (each call from Python unboxes ``eos``: one instead of four)."""
+    s_d = log_density_of(p_d, eos)
+    return log_density_of(p_s, eos), s_d, bulk_modulus_of(p_d, eos), exp_small(s_d)
 
 
 def convert_log_density(y: np.ndarray, old: StateEquation, new: StateEquation) -> np.ndarray:

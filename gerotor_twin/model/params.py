@@ -29,8 +29,7 @@ from ..geometry.tables import GeometryTables
 from ..hydraulics.gaps import sector_circumferential_flow, sector_radial_flow
 from ..hydraulics.orifice import ORIFICE_LAWS
 from .gear_coupling import N_GEAR, N_ROWS
-from ..hydraulics.state_equation import (StateEquation, bulk_modulus_of, exp_small, log_density_of, state_equation,
-                                         with_liquid_modulus)
+from ..hydraulics.state_equation import StateEquation, port_states, state_equation, with_liquid_modulus
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
@@ -224,11 +223,10 @@ def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operatin
     ``dp_ref`` is the floor of the sub-step error scale; the kernel takes the larger of it and the chamber
     pressures' recent range (:func:`.step_control.error_scale`).
     """
-    omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # one compiled specialisation (_jit.typed)
-    dp_ref = max(p_d - p_s, 1e5)
-    s_d = log_density_of(p_d, km.eos)
-    return typed(Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(log_density_of(p_s, km.eos))),
-                           s_d=s_d, dp_ref=dp_ref, beta_d=bulk_modulus_of(p_d, km.eos), rho_d=exp_small(s_d)))
+    omega, p_s, p_d = float(omega), float(p_s), float(p_d)     # every field a float: the cached specialisation
+    s_s, s_d, beta_d, rho_d = port_states(p_s, p_d, km.eos)
+    return Operating(omega=omega, p_s=p_s, p_d=p_d, rho_s=float(np.exp(s_s)), s_d=float(s_d),
+                     dp_ref=max(p_d - p_s, 1e5), beta_d=float(beta_d), rho_d=float(rho_d))
 
 
 def workspace(n: int) -> Workspace:

@@ -242,7 +242,7 @@ class PumpModel:
                 bound=self.config.numerics.max_substep_attempts)
             raise SolverFailure(f"output step at t = {t:.6g} s, shaft angle {math.degrees(theta) % 360.0:.1f}° "
                                 f"abandoned: {why}")
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(e))):
+        if not math.isfinite(float(y.sum()) + float(e[0]) + float(e[1])):      # NaN or ±inf anywhere (ln ρ, e: small)
             raise SolverFailure("pump model produced a non-finite state (solver failure)")
         swept = state.swept_angle + inputs.omega * dt
         if n:
@@ -288,7 +288,7 @@ class PumpModel:
             t=rec[:, K.R_T], theta=rec[:, K.R_THETA], chamber_pressures=rec_p, chamber_peak_pressures=rec_peak,
             delivery_pressure=rec[:, K.R_PD], delivery_flow=rec[:, K.R_QDEL], suction_flow=rec[:, K.R_QSUC],
             leak_suction_delivery=rec[:, K.R_QSD], leak_drain=rec[:, K.R_QDR],
-            restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, [K.R_EX, K.R_EY]],
-            load=rec[:, [K.R_FX, K.R_FY]], gaps=rec_g, inner_rotation=rec[:, K.R_GAMMA],
+            restriction_flow=rec[:, K.R_QREST], eccentricity=rec[:, K.R_EX:K.R_EY + 1].copy(),   # adjacent columns:
+            load=rec[:, K.R_FX:K.R_FY + 1].copy(), gaps=rec_g, inner_rotation=rec[:, K.R_GAMMA],  # a slice's copy
             contact_lobe=rec[:, K.R_KC].astype(int), theoretical_flow=qth, volumetric_efficiency=eta,
             port_mass_in=float(dvol[FL_MASS_IN]), port_mass_out=float(dvol[FL_MASS_OUT]))
