@@ -220,7 +220,7 @@ def cmd_bench(args) -> int:
             raise InputError("--rpm", args.rpm, f"speeds in (0, {cfg.range.max_speed_rpm:g}] rpm")
         (bar,) = _floats(args.bar or "27.5", "--bar")[:1]
         rows = realtime(cfg, models=tuple((args.models or "fixed,mobility").split(",")), speeds=speeds, bar=bar,
-                        seconds=args.seconds, repeats=args.repeats)
+                        seconds=args.seconds, repeats=args.repeats, call_s=_call_s(args))
         if args.json:
             _write_json(args.json, {"realtime": rows})
     elif args.what == "accuracy":
@@ -299,6 +299,15 @@ def _bench_parts(args) -> int:
     return 0
 
 
+def _call_s(args) -> float | None:
+    """``bench realtime --call-ms``: model time per ``advance`` call [s] (None: the run in one call)."""
+    if args.call_ms is None:
+        return None
+    if not (math.isfinite(args.call_ms) and 0.0 < args.call_ms <= 1e3 * args.seconds):
+        raise InputError("--call-ms", args.call_ms, f"(0, {1e3 * args.seconds:g}] ms (at most --seconds)")
+    return 1e-3 * args.call_ms
+
+
 def _bench_family(args) -> int:
     """``bench accuracy|realtime --family [DIR]``: every pump of the family on its own grid (model/family.py)."""
     from .model.family import family_grid, family_pumps
@@ -319,7 +328,8 @@ def _bench_family(args) -> int:
         else:
             from .model.bench import family_realtime
             print(f"{pump.name} ({pump.path}):", flush=True)
-            rows = family_realtime(cfg, models=models, seconds=args.seconds, repeats=args.repeats)
+            rows = family_realtime(cfg, models=models, seconds=args.seconds, repeats=args.repeats,
+                                   call_s=_call_s(args))
         out[pump.name] = {"config": str(pump.path), "points": rows}
     if args.json:
         _write_json(args.json, {"family": out})
@@ -456,6 +466,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")
     b.add_argument("--repeats", type=int, default=3)
+    b.add_argument("--call-ms", type=float, default=None,
+                   help="realtime: advance in calls of this much model time [ms], as the node does once per input "
+                        "sample (e.g. 1 at 1 kHz), so the figure includes each call's own cost (default: one call)")
     b.add_argument("--config", help="pump YAML")
     b.add_argument("--family", nargs="?", const="", default=None, metavar="DIR",
                    help="accuracy / realtime: every pump YAML of DIR (default config/pumps/) on its own range "

@@ -146,6 +146,31 @@ def test_cli_bench_realtime_takes_rpm_and_bar(tmp_path, capsys):
     assert err.startswith("error: --rpm = '4000'") and "\n" not in err
 
 
+def test_cli_bench_realtime_in_calls(tmp_path, capsys):
+    """Behaviour: --call-ms advances in calls of that much model time (as the node does per input sample), says
+    so, and records it; a value outside (0, --seconds] is one line naming the option, exit 2.  The calls cover
+    the same model time as one call: as many output steps (the model's step count)."""
+    from gerotor_twin.cli import main
+    from gerotor_twin.config import load_config
+    from gerotor_twin.model.bench import advance_in_calls
+    from gerotor_twin.model.pump import Inputs, PumpModel
+    js = tmp_path / "b.json"
+    assert main(["bench", "realtime", "--models", "fixed", "--rpm", "1500", "--seconds", "0.01", "--repeats", "1",
+                 "--call-ms", "2", "--json", str(js)]) == 0
+    assert "in calls of 2 ms" in capsys.readouterr().out
+    assert json.loads(js.read_text())["realtime"][0]["call_s"] == pytest.approx(2e-3)
+    assert main(["bench", "realtime", "--seconds", "0.01", "--call-ms", "20"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --call-ms = 20") and "\n" not in err
+    cfg = load_config()
+    m = PumpModel(cfg, "fixed")
+    inp = Inputs(1500 * 3.141592653589793 / 30, 101325.0, 101325.0 + 10e5)
+    s0 = m.initial_state(inp)
+    one = advance_in_calls(m, s0, 0.012, inp)
+    many = advance_in_calls(m, s0, 0.012, inp, call_s=0.003)
+    assert many.t == pytest.approx(one.t) and many.counts["steps"] == one.counts["steps"]
+
+
 def test_cli_output_into_a_closed_pipe_is_quiet(monkeypatch, capsys):
     """Behaviour: when the reader of stdout goes away (`gerotor-twin ... | head`) the command ends with
     128 + SIGPIPE and no traceback or 'error:' line."""

@@ -9,18 +9,32 @@ from ..bearing.registry import MODEL_NAMES
 from .pump import Inputs, PumpModel
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
-__all__ = ["realtime", "family_realtime", "models_cost"]
+__all__ = ["realtime", "family_realtime", "models_cost", "advance_in_calls"]
+
+
+def advance_in_calls(model, state, seconds: float, inputs, call_s: float | None = None):
+    """``model`` advanced by ``seconds`` [s] from ``state`` in one ``advance`` call (``call_s`` None), or in calls of
+    ``call_s`` [s] of model time each, as the node makes them (one per input sample); returns the last state."""
+    if not call_s:
+        return model.advance(state, seconds, inputs)[0]
+    calls = max(1, int(round(seconds / call_s)))
+    for _ in range(calls):
+        state, _ = model.advance(state, seconds / calls, inputs)
+    return state
 
 
 def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), bar=27.5, seconds=1.0,
-             repeats=3, out=print) -> list[dict]:
+             repeats=3, out=print, call_s: float | None = None) -> list[dict]:
     """Model-only real-time factor: simulated time / wall time, one core, after warm-up.
 
-    Medians of ``repeats`` runs of ``seconds`` simulated at each speed and ``bar``.  µs/sub-step: wall time
-    of the last run per ROS2 sub-step attempted in it (accepted and rejected).
+    Medians of ``repeats`` runs of ``seconds`` simulated at each speed and ``bar``, each in one ``advance`` call
+    or, with ``call_s`` [s], in calls of that much model time (the node's sample period: then the figure includes
+    each call's own cost, :func:`advance_in_calls`).  µs/sub-step: wall time of the last run per ROS2 sub-step
+    attempted in it (accepted and rejected).
     """
     rows = []
-    out(f"real-time factor of the pump model ({bar:g} bar, {seconds:g} s simulated, median of {repeats}; "
+    how = f"in calls of {1e3 * call_s:g} ms" if call_s else "in one call"
+    out(f"real-time factor of the pump model ({bar:g} bar, {seconds:g} s simulated {how}, median of {repeats}; "
         f"RTF = simulated / wall time, CPU RTF = simulated / CPU time of this process)")
     out(f"  {'model':9s} {'rpm':>5s} {'bar':>5s} {'wall [s]':>9s} {'RTF':>6s} {'CPU RTF':>8s} {'sub-steps/rev':>14s} "
         f"{'µs/sub-step':>12s}")
@@ -34,14 +48,15 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
             for _ in range(repeats):
                 c0, r0 = s.counts["substeps"], s.counts["rejected_substeps"]
                 t0, p0 = time.perf_counter(), time.process_time()
-                s, _ = m.advance(s, seconds, inp)
+                s = advance_in_calls(m, s, seconds, inp, call_s)
                 walls.append(time.perf_counter() - t0)
                 cpus.append(time.process_time() - p0)
             wall, cpu = statistics.median(walls), statistics.median(cpus)
             n_sub = s.counts["substeps"] - c0 + s.counts["rejected_substeps"] - r0
             sub = (s.counts["substeps"] - c0) / (seconds * rpm / 60)
             us = 1e6 * walls[-1] / max(n_sub, 1)
-            rows.append({"model": name, "rpm": rpm, "bar": bar, "wall_s": wall, "real_time_factor": seconds / wall,
+            rows.append({"model": name, "rpm": rpm, "bar": bar, "call_s": call_s, "wall_s": wall,
+                         "real_time_factor": seconds / wall,
                          "cpu_real_time_factor": seconds / cpu, "substeps_per_revolution": sub,
                          "us_per_substep": us})
             out(f"  {name:9s} {rpm:5d} {bar:5.1f} {wall:9.3f} {seconds / wall:6.2f} {seconds / cpu:8.2f} {sub:14.0f} "
@@ -49,7 +64,8 @@ def realtime(config, models=("fixed", "mobility"), speeds=(1000, 2000, 3000), ba
     return rows
 
 
-def family_realtime(config, models=("mobility",), seconds=1.0, repeats=3, out=print) -> list[dict]:
+def family_realtime(config, models=("mobility",), seconds=1.0, repeats=3, out=print,
+                    call_s: float | None = None) -> list[dict]:
     """:func:`realtime` of one family pump at its top speed and both ends of its delivery pressure.
 
     Parameters
@@ -58,7 +74,7 @@ def family_realtime(config, models=("mobility",), seconds=1.0, repeats=3, out=pr
         The pump (its ``range`` gives the points, :func:`.family.speed_extremes`, :func:`.family.pressure_extremes`).
     models : sequence of str
         Gear models.
-    seconds, repeats : float, int
+    seconds, repeats, call_s : float, int, float or None
         As :func:`realtime`.
     out : callable
         Where the printed table goes.
@@ -73,7 +89,8 @@ def family_realtime(config, models=("mobility",), seconds=1.0, repeats=3, out=pr
     top = int(round(speed_extremes(config)[1]))
     rows = []
     for bar in pressure_extremes(config):
-        rows += realtime(config, models=models, speeds=(top,), bar=bar, seconds=seconds, repeats=repeats, out=out)
+        rows += realtime(config, models=models, speeds=(top,), bar=bar, seconds=seconds, repeats=repeats, out=out,
+                         call_s=call_s)
     return rows
 
 
