@@ -168,8 +168,9 @@ def test_typed_casts_scalars_to_the_declared_types_and_keeps_values_and_arrays()
     assert t.rows is rows
     assert [type(v) for v in t[1:]] == [float, float, float, bool, bool]
     assert t[1:] == (2.0, 0.5, 3.0, True, True)
-    eos = _jit.typed(StateEquation(1, 2, 3, 4, 5, 6, 7, 8, 9, rows[0], rows[1], kind=1.0))
-    assert type(eos.kind) is int and type(eos.beta_liquid) is float
+    eos = _jit.typed(StateEquation(1, 2, 3, 4, 5, 6, 7, 8, 9, rows, 10, kind=1.0))
+    assert type(eos.kind) is int and type(eos.beta_liquid) is float and type(eos.inv_ds) is float
+    assert eos.band_c is rows
 
 
 @pytest.mark.slow
