@@ -90,6 +90,38 @@ def test_tracks_leakage_factor_on_steady_operation(monitor):
     assert {kv["key"]: kv["value"] for kv in st["values"]}["fault"] == "unknown"
 
 
+def test_classifier_in_background_leaves_the_tick_free(fixed_model, monkeypatch):
+    """Behaviour: with ``background`` the fault classifier runs in a worker thread: while a classification is
+    held (a stand-in that waits for the test's release), the monitor goes on updating the leakage factor and
+    publishes no naming yet; once released, every window is classified in its order and the naming is the
+    classifier's.  Inside the tick (the default), the first update would wait for the release instead."""
+    import threading
+    from gerotor_twin.twin import health as health_module
+    from gerotor_twin.twin.diagnosis import Diagnosis
+    started, release, seen = threading.Event(), threading.Event(), []
+
+    def held_classify(windows, signatures, settings=None, relinearise=None):
+        started.set()
+        release.wait(20.0)
+        seen.append(len(windows))
+        return Diagnosis("tip_wear", 0.9, {}, {}, {}, 1.0, len(windows))
+
+    monkeypatch.setattr(health_module, "classify", held_classify)
+    mon = HealthMonitor(fixed_model, HealthSettings(), background=True)
+    try:
+        Feed(mon).run(6.0, 1.2)
+        assert started.wait(20.0)
+        assert mon.est.updates >= 3 and seen == []                    # updates went on while it was held
+        assert mon.diagnosis is None and mon.fault_values()[0] == -1.0
+        release.set()
+        mon.wait(20.0)
+        assert seen == list(range(1, mon.est.updates + 1))            # every window, in order
+        assert mon.diagnosis.kind == "tip_wear" and KINDS[int(mon.fault_values()[0])] == "tip_wear"
+    finally:
+        release.set()
+        mon.close()
+
+
 def test_window_outside_the_range_is_not_classified(monitor):
     """Behaviour: a settled window above the pump's speed range still updates k but is not classified (the
     steady model cannot run there); the monitor keeps running."""

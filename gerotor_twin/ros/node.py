@@ -119,7 +119,8 @@ class TwinNode(Node):
         self.config_text = Path(cfg_path).read_text()
         self.model = PumpModel(self.config, prm["bearing_model"])
         self.settings = P.twin_settings(prm)
-        self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm))
+        self.core = TwinCore(self.model, self.settings, health=P.health_settings(prm),
+                             diagnosis_in_background=prm["diagnosis_in_background"])
         self.core.residual.meter_topic = prm["delivery_flow_topic"]     # named in the residual's status
         self._warm_up(Inputs)
         self._check_real_time(prm["startup_rtf_threshold"])

@@ -136,6 +136,10 @@ PARAMETERS: tuple[Param, ...] = (
     Param("log_retry_s", 5.0, "period of the free-space check after a write error [s]", 0.1, 3600.0),
 ) + (
     # health monitor (gerotor_twin.twin.health); names = "health_" + HealthSettings field
+    Param("diagnosis_in_background", True, "true: the health monitor's fault classifier runs in a worker thread "
+                                           "beside the model thread, its naming published from the update after it "
+                                           "finished; false: inside the model's tick (a classification holds the "
+                                           "model up to a quarter second) [-]"),
     Param("health_adapt", False, "true: the estimated leakage factor feeds back into the model; false: pure monitor [-]"),
     Param("health_warn_pt", 2.0, "WARN when the reference efficiency fell this far below the calibrated one [%-pt]",
           0.0, 100.0),

@@ -123,6 +123,11 @@ class TwinCore:
     timer : callable, optional
         Returns seconds; measures compute time for the real-time factor
         (default :func:`time.perf_counter`).
+    health : HealthSettings, optional
+        The health monitor's settings (defaults if omitted).
+    diagnosis_in_background : bool
+        The health monitor's fault classifier in a worker thread beside ``tick`` (the node), not inside it
+        (default: inside, deterministic; :class:`~gerotor_twin.twin.health.HealthMonitor`).
 
     Attributes
     ----------
@@ -141,7 +146,8 @@ class TwinCore:
     """
 
     def __init__(self, model: PumpModel, settings: TwinSettings | None = None, *,
-                 timer: Callable[[], float] = time.perf_counter, health: HealthSettings | None = None):
+                 timer: Callable[[], float] = time.perf_counter, health: HealthSettings | None = None,
+                 diagnosis_in_background: bool = False):
         self.model = model
         self.settings = s = settings or TwinSettings()
         self.N = model.N
@@ -152,7 +158,7 @@ class TwinCore:
         self.driver = ClockDriver(model, s, self.book, self.recorder, self._events)
         self._win = {"simulated_s": 0.0, "compute_s": 0.0, "counts": {}}
         self._last_tick: TickResult | None = None
-        self.health = HealthMonitor(model, health or HealthSettings())
+        self.health = HealthMonitor(model, health or HealthSettings(), background=diagnosis_in_background)
         #: measured against predicted revolution-mean flow (``twin/flow_residual``)
         self.residual = FlowResidual(model.displacement, s.stale_timeout_s)
         self.driver.jump_back_listeners += [self.residual.clock_jumped_back, self.health.clock_jumped_back]

@@ -261,8 +261,15 @@ class _Window:
 class HealthMonitor:
     """Settled-interval leakage estimation, reference efficiency and status (see module doc)."""
 
-    def __init__(self, model, settings: HealthSettings | None = None):
+    def __init__(self, model, settings: HealthSettings | None = None, background: bool = False):
+        """``background``: the fault classifier runs in a worker thread beside the caller's tick (the node: a
+        classification holds the model thread up to a quarter second, docs/calibration_health.md), its naming
+        published from the first update after it finished; False: in the tick, deterministic (replays,
+        ``run-bag``)."""
         self.model = model
+        self.background = background
+        self._pool = None           # the worker (background), created on the first classification
+        self._jobs: collections.deque = collections.deque()    # its classifications not yet collected (Futures)
         s = settings or HealthSettings()
         rng = model.config.range          # the reference point inside the pump's range (a 6-bar lube pump: 6 bar)
         self.settings = s = replace(s, reference_rpm=min(s.reference_rpm, rng.max_speed_rpm),
@@ -371,6 +378,35 @@ class HealthMonitor:
                            w.op[3] / w.oil_ticks if w.oil_ticks else None, q_meas, q_pred, q_th, sd, got, expected)
         if self.settings.adapt or w.ticks == 0:
             return
+        if not self.background:
+            self._classify(rec)
+            return
+        self._raise_failed()
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gerotor_twin_diagnosis")
+        self._jobs.append(self._pool.submit(self._classify, rec))     # one worker: the windows in their order
+
+    def _raise_failed(self) -> None:
+        """Re-raise here what a finished background classification raised (as the tick would have)."""
+        while self._jobs and self._jobs[0].done():
+            self._jobs.popleft().result()
+
+    def wait(self, timeout: float | None = None) -> None:
+        """Wait for the background classifications not yet finished, if any, and re-raise an error of theirs
+        (``timeout`` [s] for each)."""
+        while self._jobs:
+            self._jobs[0].result(timeout)
+            self._jobs.popleft()
+
+    def close(self) -> None:
+        """Stop the background worker (after the classification running now)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+    def _classify(self, rec: WindowRecord) -> None:
+        """Add ``rec`` to the recent windows with its signatures and name the fault (``self.diagnosis``)."""
         s = self.settings
         try:
             if self._signature_of is None:
