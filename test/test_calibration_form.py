@@ -35,12 +35,15 @@ def test_model_form_error_and_interval_closed_form():
     """Closed form: held-out errors ±1, ±2 pt with a parameter variance of (0.316 pt)² each and no measurement
     variance → σ_d² = mean(e²) − 1e-5 = 2.5e-4 − 1e-5; the half-width at a point of parameter variance 4e-6 and
     measurement variance 1e-6 is t(0.975, 3)·√(4e-6 + 1e-6 + σ_d²); errors smaller than the parameters'
-    share give σ_d = 0 (not negative)."""
+    share give σ_d = 0 (not negative); a fold whose covariance is undefined (NaN) counts none."""
     e = np.array([0.01, -0.01, 0.02, -0.02])
     form = P.model_form_error(e, np.full(4, 1e-5), np.zeros(4))
     assert form.sd ** 2 == pytest.approx(2.5e-4 - 1e-5, rel=1e-12) and form.held_out == 4 and form.dof == 3
     assert form.half_width(4e-6, 1e-6) == pytest.approx(student_t.ppf(0.975, 3) * math.sqrt(5e-6 + form.sd ** 2))
     assert P.model_form_error(np.array([1e-4, -1e-4]), np.full(2, 1e-6), np.zeros(2)).sd == 0.0
+    # a fold without residual degrees of freedom (NaN covariance): its whole error is model form
+    assert P.model_form_error(e, np.array([np.nan, np.nan, 1e-5, 1e-5]), np.zeros(4)).sd ** 2 == \
+        pytest.approx(2.5e-4 - 0.5e-5, rel=1e-12)
     g = np.array([[1.0, 0.0], [0.5, 2.0]])
     cov_x = np.array([[4.0, 1.0], [1.0, 9.0]])
     assert P.param_variance(g, cov_x).tolist() == pytest.approx([4.0, 0.25 * 4 + 2 * 0.5 * 2 * 1 + 4 * 9])

@@ -110,9 +110,13 @@ class ModelFormError:
 
 def model_form_error(cv_errors, cv_param_var, cv_meas_var, level: float = 0.95) -> ModelFormError:
     """σ̂_d from held-out errors e_j [-], their fold fits' parameter variances and their measurement
-    variances [-²] (module doc)."""
+    variances [-²] (module doc).  A NaN parameter variance (a fold fitted on no more points than it has
+    directions: no residual degrees of freedom, no covariance) counts as 0, so that fold's whole error is
+    taken as model-form error (the interval errs on the wide side)."""
     e = np.asarray(cv_errors, float)
-    excess = e ** 2 - np.asarray(cv_param_var, float) - np.asarray(cv_meas_var, float)
+    # a fold fitted on no more points than directions has no covariance (NaN): its errors count as form error
+    pv = np.nan_to_num(np.asarray(cv_param_var, float), nan=0.0)
+    excess = e ** 2 - pv - np.nan_to_num(np.asarray(cv_meas_var, float), nan=0.0)
     return ModelFormError(float(math.sqrt(max(0.0, float(np.mean(excess))))) if e.size else 0.0, int(e.size), level)
 
 
