@@ -35,7 +35,9 @@ prediction of a new observation), with the residual variance s² replaced by the
 plus a model-discrepancy variance (the discrepancy term δ(x) of Kennedy & O'Hagan, "Bayesian calibration
 of computer models", J. R. Stat. Soc. B 63(3), 425–464, 2001) estimated by cross-validation across
 operating regions (Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 2nd ed.,
-sec. 7.10), Student's t for the m held-out errors it rests on.  It treats the form error as a scatter
+sec. 7.10), Student's t for the m held-out errors it rests on (m counts plateaus, not folds: the errors of
+one fold share its fit, so fewer independent errors stand behind σ̂_d than m says, and with few folds the
+t-quantile is optimistic).  It treats the form error as a scatter
 of one size over the operating range: where the form error grows towards one corner of the range, the
 interval is too wide elsewhere and too narrow there, and a range the folds never held out is not covered
 by it.  The coverage over the shipped bench pumps is measured by
