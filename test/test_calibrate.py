@@ -181,18 +181,22 @@ def test_thermometer_lag_note():
 
 
 def test_cli_end_to_end(bags, tmp_path, capsys):
-    """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability."""
+    """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability and, by
+    default cross-validated across speeds, whether the fit beats the nominal twin on held-out plateaus."""
     bag = bags[FACTORS[0]][0]
     out, js, rep = tmp_path / "p.yaml", tmp_path / "r.json", tmp_path / "r.html"
     assert main(["calibrate", "--bench", str(bag), "-o", str(out), "--params", "lateral", "--json", str(js),
                  "--report", str(rep), "--settle-s", "1.0", "--min-plateau-s", "1.0", "--jobs", "1",
                  "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "hold-out" in text and "wrote" in text
+    assert "held-out RMSE" in text and "wrote" in text
+    assert [ln for ln in text.splitlines() if ln.startswith("calibration ")][0].startswith(
+        "calibration accepted: lateral predicts the held-out plateaus better than the nominal twin")
     r = json.loads(js.read_text())
     slopes = [abs(p["oil_slope_k_s"]) for p in r["plateau_records"]]
     assert ("--oil-sensor-tau" in text) == (max(slopes) >= 0.05)     # the emulator warms its oil
-    assert r["params"] == ["lateral"] and r["fit"]["unseparable"] == []
+    assert r["params"] == ["lateral"] and r["fit"]["unseparable"] == [] and r["verdict"]["calibrated"]
+    assert r["selection"]["cv"] == "speed" and r["holdout"] is None
     assert "<img" in rep.read_text() and load_config(out).calibration["model"] == "mobility"
     assert main(["calibrate", "--bench", str(bag), "-o", str(out)]) == 2      # exists, no --overwrite
 

@@ -29,13 +29,14 @@ def _rec(rpm, bar, flow=1e-4, index=1):
 
 def test_folds_and_candidate_sets_closed_form():
     """Closed form: speeds within 2 % are one fold; one fold per point; the prior and every subset up to three
-    parameters, the prefixes beyond; auto → speed with two speeds, point with one."""
+    parameters, the prefixes beyond; auto → speed with two speeds, point with one, none with a single point."""
     recs = [_rec(1000, 5), _rec(2000, 5), _rec(1010, 10), _rec(3000, 5), _rec(2020, 20)]
     assert [f.tolist() for f in S.folds(recs, "speed")] == [[0, 2], [1, 4], [3]]
     assert len(S.folds(recs, "point")) == 5
     assert S.candidate_sets(("a", "b")) == [(), ("a",), ("b",), ("a", "b")]
     assert S.candidate_sets(("a", "b", "c", "d")) == [(), ("a",), ("a", "b"), ("a", "b", "c"), ("a", "b", "c", "d")]
-    assert S.resolve_scheme("auto", recs) == "speed" and S.resolve_scheme("auto", recs[:1]) == "point"
+    assert S.resolve_scheme("auto", recs) == "speed" and S.resolve_scheme("auto", [recs[0], recs[2]]) == "point"
+    assert S.resolve_scheme("auto", recs[:1]) == "none"
 
 
 def test_baseline_recovers_an_exact_two_term_law():
@@ -83,7 +84,8 @@ def deficit_map():
 def test_cross_validation_chooses_the_displacement(deficit_map):
     """Behaviour (synthetic truth, the twin's own model): among the prior, the gaps' common factor and the
     gaps with the displacement, leave-one-speed-out chooses both; held out it predicts η_v within 0.05 pt where
-    the clearance-only fit is off by more than 1 pt; the prior is among the candidates and worse."""
+    the clearance-only fit is off by more than 1 pt; the prior is among the candidates and worse; no model-form
+    error is seen held out, so the prediction interval is the parameters' part (closed form)."""
     res = calibrate_records(deficit_map, ["deficit.csv"], params=("tip", "lateral", "displacement"), cv="speed",
                             candidates=[("tip", "lateral"), ("tip", "lateral", "displacement")],
                             jobs=1)
@@ -93,7 +95,14 @@ def test_cross_validation_chooses_the_displacement(deficit_map):
     assert set(by) == {"", "tip+lateral", "tip+lateral+displacement"}
     assert by["tip+lateral+displacement"]["cv_max_abs"] < 5e-4
     assert by["tip+lateral"]["cv_max_abs"] > 0.01 and by[""]["cv_rmse"] > by["tip+lateral"]["cv_rmse"]
-    assert not sel["baseline_better"] and sel["prediction_band_eta"] < 1e-3
+    assert not sel["baseline_better"]
+    # the held-out errors show no model-form error, so the interval is the parameters' part alone (under the
+    # fit's assumed 0.3 % flow error, --flow-floor): t(0.975, m − 1) × their sd at every point
+    pi = sel["prediction_interval"]
+    assert pi["model_form_sd_eta"] < 1e-4 and pi["held_out"] == 6
+    t = student_t.ppf(0.975, 5)
+    assert pi["half_width_eta"] == pytest.approx([t * math.hypot(a, pi["model_form_sd_eta"])
+                                                  for a in pi["sd_param_eta"]], rel=1e-9)
     assert res["config"]["volumetric"]["displacement_factor"] == pytest.approx(0.96, abs=2e-3)
 
 

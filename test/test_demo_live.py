@@ -48,6 +48,21 @@ def test_calibration_note_and_labels():
         "calibrated from pump_fitted_bench_map"
 
 
+def test_calibration_note_says_the_prediction_interval_and_a_refusal(tmp_path):
+    """Behaviour: a calibration block with a prediction interval and a refused verdict (nominal values kept)
+    gives both in the note, the factor's interval called a parameter interval."""
+    p = tmp_path / "fitted.yaml"
+    p.write_text(yaml.safe_dump({"calibration": {
+        "bags": ["b.mcap"], "plateaus": 9, "fitted_combinations": [
+            {"combination": "ln(lateral)", "factor": 1.2, "factor_ci95": [1.19, 1.21]}],
+        "prediction_interval": {"eta_half_width_twin": 0.0123},
+        "verdict": {"calibrated": False, "message": "calibration refused: ..."}}}))
+    note = calibration_note(p)
+    assert "(parameter 95 % CI 1.1900-1.2100)" in note
+    assert "eta_v predicted +- 1.23 %-pt (95 %, model form included)" in note
+    assert note.endswith("calibration refused: the nominal values kept")
+
+
 def test_background_steps_stop_at_a_failure_and_on_cancel(tmp_path):
     """Behaviour: the background commands run in order at low priority; the first failure stops the chain and
     is named; cancel ends a running command at once (no calibration left running after a failed node)."""

@@ -25,6 +25,7 @@ from ..units import m3s_to_lpm
 from . import fit as C
 from .fit_model import apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus
+from . import prediction as P
 from . import selection as S
 from .pump_map import MapLimits, PumpMapError, read_map
 
@@ -46,6 +47,7 @@ def _fit_summary(fr: C.FitResult, raw: dict, records, displacement: float) -> di
             "insensitive": a["insensitive"], "fixed": a["fixed"], "correlation_at_prior": _nan_none(a["correlation"]),
             "singular_ratios": a["singular_ratios"].tolist(), "rcond": a["rcond"],
             "residual_variance_factor": fr.s2, "dof": fr.dof, "function_evaluations": fr.iterations,
+            "cov_x": fr.cov_x.tolist(),
             "plateaus": fitted, "plateaus_prior": prior,
             "eta_error": C.summary_stats(fitted), "eta_error_prior": C.summary_stats(prior),
             "flow_error_m3s": C.summary_stats(fitted, "flow_error_m3s"),
@@ -160,13 +162,68 @@ def _run(records, raw, plan: FitPlan, jobs, displacement, opts, say) -> dict:
         if plan.cv == "none":
             train, held = C.split_holdout(records, plan.holdout)
             ho = _holdout(ev, plan.params, train, held, raw, displacement, opts, say) if held else None
-            say(f"final fit on all {len(records)} plateaus")
-            sel, fr = None, C.fit(ev, plan.params, records, **opts, progress=say)
+            v = holdout_verdict(ho, plan.params)
+            names = plan.params if v["calibrated"] else ()
+            say(f"final fit on all {len(records)} plateaus" + ("" if names else " (nominal values kept)"))
+            sel, fr = None, C.fit(ev, names, records, **opts, progress=say)
         else:
             ho = None
             sel, fr = _select(ev, records, raw, plan, displacement, opts, say)
-        return {"holdout": ho, "selection": sel, "params": list(fr.names),
+            v = sel.pop("verdict")
+        return {"holdout": ho, "selection": sel, "verdict": v, "params": list(fr.names),
                 "fit": _fit_summary(fr, raw, records, displacement), "simulations": ev.simulated, "jobs": ev.jobs}
+
+
+def _pt(v: float) -> str:
+    return f"{100 * v:.2f}"
+
+
+def holdout_verdict(ho: dict | None, names) -> dict:
+    """Whether the fit of ``names`` on the training plateaus beats the nominal twin on the held-out ones (``--cv
+    none``): its held-out η RMSE strictly below the nominal's, else the nominal values are kept."""
+    if ho is None:
+        return {"calibrated": True, "checked": False, "basis": "none", "chosen": list(names),
+                "message": "calibration not checked: no plateau held out (--holdout 0 with --cv none); the fitted "
+                           "values are written without evidence that they predict better than the nominal ones"}
+    fit_e, nom_e = ho["eta_error"], ho["eta_error_prior"]
+    fm, nm = (float(np.mean([abs(r["eta_error"]) for r in ho[k]])) for k in ("plateaus", "plateaus_prior"))
+    ok = fit_e["rmse"] < nom_e["rmse"]
+    figures = (f"held-out |η error| mean / RMSE: fitted {_pt(fm)} / {_pt(fit_e['rmse'])} pt, nominal {_pt(nm)} / "
+               f"{_pt(nom_e['rmse'])} pt on {len(ho['held_out'])} plateaus")
+    message = (f"calibration accepted: {'+'.join(names)} predicts the held-out plateaus better than the nominal "
+               f"twin ({figures})" if ok else
+               f"calibration refused: the fitted twin predicts the held-out plateaus no better than the nominal one "
+               f"({figures}); the nominal values are kept")
+    return {"calibrated": bool(ok), "checked": True, "basis": "holdout", "chosen": list(names) if ok else [],
+            "nominal_heldout_rmse": nom_e["rmse"], "nominal_heldout_mean_abs": nm,
+            "fitted_heldout_rmse": fit_e["rmse"], "fitted_heldout_mean_abs": fm, "message": message}
+
+
+def selection_verdict(cands: list, pick, scheme: str, noise: float) -> dict:
+    """Whether the chosen candidate is a fitted set (it then beats the nominal twin held out beyond the noise
+    ``noise`` [-], :func:`.selection.choose`) or the prior (calibration refused, the nominal values kept)."""
+    prior = next(c for c in cands if not c.names)
+    fitted = [c for c in cands if c.names]
+    best = min(fitted, key=lambda c: c.cv_rmse) if fitted else None
+    mean_abs = lambda c: float(np.mean(np.abs(c.cv_errors)))          # noqa: E731
+    nominal = f"nominal {_pt(mean_abs(prior))} / {_pt(prior.cv_rmse)} pt"
+    where = f"leave one {scheme} out, {prior.cv_errors.size} held-out plateaus"
+    if pick.names:
+        message = (f"calibration accepted: {'+'.join(pick.names)} predicts the held-out plateaus better than the "
+                   f"nominal twin (held-out |η error| mean / RMSE: fitted {_pt(mean_abs(pick))} / {_pt(pick.cv_rmse)} "
+                   f"pt, {nominal}; {where})")
+    else:
+        other = (f", best fitted set {'+'.join(best.names)} {_pt(mean_abs(best))} / {_pt(best.cv_rmse)} pt"
+                 if best is not None else "")
+        better = best is not None and best.cv_rmse < prior.cv_rmse
+        message = (f"calibration refused: no fitted parameter set predicts the held-out plateaus better than the "
+                   f"nominal twin{' by more than the noise (' + _pt(noise) + ' pt)' if better else ''} (held-out "
+                   f"|η error| mean / RMSE: {nominal}{other}; {where}); the nominal values are kept")
+    return {"calibrated": bool(pick.names), "checked": True, "basis": f"cv-{scheme}", "chosen": list(pick.names),
+            "nominal_heldout_rmse": prior.cv_rmse, "nominal_heldout_mean_abs": mean_abs(prior),
+            "fitted_heldout_rmse": None if best is None else (pick if pick.names else best).cv_rmse,
+            "fitted_heldout_mean_abs": None if best is None else mean_abs(pick if pick.names else best),
+            "best_fitted": None if best is None else list(best.names), "message": message}
 
 
 def _select(ev, records, raw, plan: FitPlan, displacement, opts, say) -> tuple[dict, C.FitResult]:
@@ -181,11 +238,29 @@ def _select(ev, records, raw, plan: FitPlan, displacement, opts, say) -> tuple[d
     pick, why = S.choose([c for c, _ in runs], noise)
     fr = next(f for c, f in runs if c is pick)
     base = S.baseline(records, fold_index, displacement, raw["boundary"]["suction_pressure_pa"])
+    interval = _interval(ev, pick, fr, records, displacement)
     return {"cv": plan.cv, "folds": [[records[i].label() for i in f] for f in fold_index],
+            "plateau_labels": [r.label() for r in records],
             "candidates": [c.summary() for c, _ in runs], "chosen": list(pick.names), "reason": why,
             "eta_noise": noise, "cv_rmse": pick.cv_rmse, "cv_max_abs": float(np.abs(pick.cv_errors).max()),
-            "prediction_band_eta": S.prediction_band(pick), "baseline": base,
-            "baseline_better": bool(base["cv_rmse"] < pick.cv_rmse)}, fr
+            "prediction_band_eta": interval["typical_half_width_eta"], "prediction_interval": interval,
+            "baseline": base, "baseline_better": bool(base["cv_rmse"] < pick.cv_rmse),
+            "verdict": selection_verdict([c for c, _ in runs], pick, plan.cv, noise)}, fr
+
+
+def _interval(ev, pick, fr: C.FitResult, records, displacement) -> dict:
+    """The 95 % prediction interval of the chosen set's η and mean flow at every plateau (:mod:`.prediction`):
+    its parts, and the RMS half-width over the plateaus (``typical_half_width_eta``)."""
+    form = pick.model_form()
+    pv = P.param_variance(P.eta_gradients(ev, fr.names, fr.x, records, displacement, fr.flow_model), fr.cov_x)
+    mv = P.measurement_variance(records, displacement)
+    hw = form.half_width(pv, mv)
+    qth = np.array([displacement * r.omega / (2 * math.pi) for r in records])
+    twin = form.half_width(pv)
+    return {**form.as_dict(), "typical_half_width_eta": float(np.sqrt(np.mean(hw ** 2))),
+            "twin_half_width_eta": float(np.sqrt(np.mean(twin ** 2))),
+            "half_width_eta": hw.tolist(), "half_width_flow_m3s": (hw * qth).tolist(),
+            "sd_param_eta": np.sqrt(np.clip(pv, 0, None)).tolist(), "sd_meas_eta": np.sqrt(mv).tolist()}
 
 
 def provenance(result: dict) -> dict:
@@ -204,9 +279,18 @@ def provenance(result: dict) -> dict:
              "residuals": {"flow_rmse_m3s": f["flow_error_m3s"]["rmse"], "eta_rmse": f["eta_error"]["rmse"],
                            "eta_max_abs": f["eta_error"]["max_abs"],
                            "eta_rmse_prior": f["eta_error_prior"]["rmse"]}}
+    v = result.get("verdict")
+    if v:
+        block["verdict"] = {k: v[k] for k in ("calibrated", "checked", "basis", "chosen", "message")}
     sel = result.get("selection")
     if sel:
         block["residuals"]["eta_rmse_heldout"] = sel["cv_rmse"]
+        pi = sel.get("prediction_interval")
+        if pi:
+            block["prediction_interval"] = {"eta_half_width_twin": pi["twin_half_width_eta"],
+                                            "eta_half_width_measured": pi["typical_half_width_eta"],
+                                            "model_form_sd_eta": pi["model_form_sd_eta"], "level": pi["level"],
+                                            "held_out": pi["held_out"]}
         block["selection"] = {"cv": sel["cv"], "chosen": sel["chosen"], "reason": sel["reason"],
                               "cv_rmse": sel["cv_rmse"], "prediction_band_eta": sel["prediction_band_eta"],
                               "candidates": [{"params": c["params"], "fit_rmse": c["fit_rmse"], "cv_rmse": c["cv_rmse"]}
@@ -240,7 +324,7 @@ def print_summary(result: dict, out=None) -> None:
         u, unit = DISPLAY_UNITS.get(p["unit"], (1.0, ""))
         note = ("" if p["identifiable"] else "  (kept at the prior)" if p["name"] in kept
                 else "  (not separately identifiable: common factor of its group)")
-        print(f"  {p['name']:12s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:3s}  95 % CI "
+        print(f"  {p['name']:12s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:3s}  parameter 95 % CI "
               f"[{p['ci95'][0] * u:.3f}, {p['ci95'][1] * u:.3f}]{note}", file=out)
     for a, b in f["unseparable"]:
         print(f"  the data cannot separate {a} and {b}: fitted their combination, their ratio kept at the prior",
@@ -250,7 +334,7 @@ def print_summary(result: dict, out=None) -> None:
     if f.get("fixed"):
         print(f"  kept at the prior (the data confuse them with the others): {', '.join(f['fixed'])}", file=out)
     for c in (c for c in f["combinations"] if not c.get("linear")):
-        print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}"
+        print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (parameter 95 % CI {c['factor_ci95'][0]:.4f}"
               f"..{c['factor_ci95'][1]:.4f})", file=out)
     e, e0 = f["eta_error"], f["eta_error_prior"]
     print(f"  all {e['n']} {'map rows' if result.get('kind') == 'map' else 'plateaus'}: |η error| max {100 * e0['max_abs']:.2f} → {100 * e['max_abs']:.2f} pt, "
@@ -263,6 +347,11 @@ def print_summary(result: dict, out=None) -> None:
     if ho:
         print(f"  hold-out ({len(ho['held_out'])} plateaus, fitted on the other {len(ho['train'])}): |η error| max "
               f"{100 * ho['eta_error_prior']['max_abs']:.2f} → {100 * ho['eta_error']['max_abs']:.2f} pt", file=out)
+    if f["parameters"]:
+        print("  (a parameter interval says how well the data fix a parameter of this model's form, not how well "
+              "the twin predicts)", file=out)
+    if result.get("verdict"):
+        print(result["verdict"]["message"], file=out)
 
 
 def print_selection(sel: dict, out=None) -> None:
@@ -276,20 +365,30 @@ def print_selection(sel: dict, out=None) -> None:
         se = f" ± {100 * c['cv_rmse_se']:.2f}" if "cv_rmse_se" in c else ""
         print(f"    {name:34s} {100 * c['fit_rmse']:9.2f} {100 * c['cv_rmse']:7.2f}{se:>7s} "
               f"{100 * c['cv_max_abs']:13.2f}", file=out)
-    print(f"  chosen: {sel['reason']}; a predicted η_v holds ± {100 * sel['prediction_band_eta']:.2f} pt "
-          f"(95 %, from the held-out errors)", file=out)
+    print(f"  chosen: {sel['reason']}", file=out)
+    pi = sel.get("prediction_interval")
+    if pi:
+        print(f"  prediction interval of η_v (95 %): ± {_pt(pi['twin_half_width_eta'])} pt for the twin (model-form "
+              f"error {_pt(pi['model_form_sd_eta'])} pt sd from {pi['held_out']} held-out plateaus, parameters ≤ "
+              f"{_pt(max(pi['sd_param_eta'], default=0))} pt sd); against plateaus measured like these (standard "
+              f"error ≤ {_pt(max(pi['sd_meas_eta'], default=0))} pt) ± {_pt(pi['typical_half_width_eta'])} pt, of "
+              f"their mean flow ± {m3s_to_lpm(float(np.sqrt(np.mean(np.square(pi['half_width_flow_m3s']))))):.3f} "
+              f"L/min (RMS over the plateaus)", file=out)
     b = sel["baseline"]
     if sel["baseline_better"]:
         print(f"  the empirical law predicts the held-out points better than the twin: held-out RMSE "
               f"{100 * b['cv_rmse']:.2f} pt against {100 * sel['cv_rmse']:.2f} pt", file=out)
 
 
-def _candidates(args):
-    """The candidate sets of the command line: ``--candidates``, else :data:`MAP_CANDIDATES` for a map without
-    ``--params``, else None (the subsets of ``--params``)."""
+def _candidates(args, names):
+    """The candidate sets of the command line (the prior is always one besides): ``--candidates``; else for a map
+    :data:`MAP_CANDIDATES` without ``--params``, the subsets of ``--params`` with it; for recordings ``--params``
+    as one set (fitted, or the nominal values kept)."""
     if args.candidates is not None:
         return [parse_params(c) for c in args.candidates.split(";") if c.strip()]
-    return MAP_CANDIDATES if args.map and args.params is None else None
+    if args.map:
+        return MAP_CANDIDATES if args.params is None else None
+    return [names]
 
 
 def cmd_calibrate(args) -> int:
@@ -297,12 +396,14 @@ def cmd_calibrate(args) -> int:
     out = Path(args.output)
     if out.exists() and not args.overwrite:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
+    if args.holdout != 0 and args.holdout < 2:
+        raise InputError("--holdout", args.holdout, "0 (none) or an integer ≥ 2 (every k-th plateau held out)")
     if args.jobs is not None and args.jobs < 1:
         raise InputError("--jobs", args.jobs, "an integer ≥ 1")
     default = ",".join(MAP_PARAMS) if args.map else "tip,lateral"
     names = parse_params(default if args.params is None else args.params)
-    cv = args.cv or ("auto" if args.map else "none")
-    candidates = _candidates(args)
+    cv = args.cv or "auto"
+    candidates = _candidates(args, names)
     from ..model.pump import BEARING_MODELS
     if args.model not in BEARING_MODELS:
         raise InputError("--model", args.model, " | ".join(BEARING_MODELS))
@@ -364,12 +465,14 @@ def add_parser(sub) -> None:
                         "candidate set (default tip,lateral; with --map tip,lateral,displacement,bypass)")
     p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,
                    help="choose the parameter set by cross-validation: leave one speed (or point) out; auto: speed "
-                        "when there are two speeds or more (default: auto with --map, none with --bench)")
+                        "when there are two speeds or more (default auto); none: fit --params, hold out every "
+                        "--holdout-th plateau; either way the nominal values are kept when the fit predicts the "
+                        "held-out plateaus no better")
     p.add_argument("--candidates", default=None, metavar="SETS",
                    help="candidate sets for --cv, ';'-separated (e.g. 'displacement;tip,lateral,displacement'); "
                         "the prior is always one (default with --map and no --params: the gaps, the displacement, "
-                        "the gaps with each of displacement and bypass, and all four; else every subset of "
-                        "--params up to 3 parameters, their prefixes beyond)")
+                        "the gaps with each of displacement and bypass, and all four; with --map and --params every "
+                        "subset of --params up to 3 parameters, their prefixes beyond; with --bench --params as one set)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4,

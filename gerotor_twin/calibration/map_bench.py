@@ -96,7 +96,7 @@ def _row(case: MapCase, res: dict) -> dict:
             "nominal_mean_abs": mean_abs(cands[""]["cv_errors"]), "chosen": "+".join(sel["chosen"]) or "prior",
             "fit_rmse": chosen["fit_rmse"], "cv_mean_abs": mean_abs(chosen["cv_errors"]),
             "cv_max_abs": chosen["cv_max_abs"], "band": sel["prediction_band_eta"],
-            "covered": int(np.sum(np.abs(chosen["cv_errors"]) <= sel["prediction_band_eta"])),
+            "covered": int(np.sum(np.abs(chosen["cv_errors"]) <= np.array(sel["prediction_interval"]["half_width_eta"]))),
             "points": len(chosen["cv_errors"]),
             "law_cv_mean_abs": mean_abs(sel["baseline"]["cv_errors"]),
             "law_cv_max_abs": sel["baseline"]["cv_max_abs"], "law_better": sel["baseline_better"]}
@@ -107,7 +107,7 @@ def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
     out = out or sys.stdout
     rows = []
     print("| map | nominal twin: held-out mean \\|η err\\| | chosen set | fit RMSE | held-out mean \\|η err\\| (max) "
-          "| 95 % band (held-out points inside) | empirical law: held-out mean (max) |", file=out)
+          "| 95 % prediction interval, RMS half-width (held-out points inside) | empirical law: held-out mean (max) |", file=out)
     print("|---|---|---|---|---|---|---|", file=out)
     for case in MAPS:
         if names and case.name not in names:

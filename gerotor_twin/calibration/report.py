@@ -70,16 +70,36 @@ def _selection(sel: dict | None) -> str:
                  f"{100 * b['cv_max_abs']:.2f}"])
     verdict = ("<p><b>The empirical law predicts the held-out points better than the twin.</b></p>"
                if sel["baseline_better"] else "")
+    pi = sel.get("prediction_interval")
+    band = (f"<p>95 % prediction interval of a predicted η_v: ± {100 * pi['typical_half_width_eta']:.2f} pt (RMS over "
+            f"the plateaus): model-form error {100 * pi['model_form_sd_eta']:.2f} pt sd from {pi['held_out']} held-out "
+            f"plateaus, with the parameters' and the measurement's parts per plateau (table below).</p>") if pi else ""
     return (f"<h2>Parameter set (leave one {html.escape(sel['cv'])} out, {len(sel['folds'])} folds)</h2>"
             + _table(["set", "fit RMSE [pt]", "held-out RMSE [pt]", "held-out max [pt]"], rows)
-            + f"<p>Chosen: {html.escape(sel['reason'])}; a predicted η_v holds ± "
-              f"{100 * sel['prediction_band_eta']:.2f} pt (95 %, from the held-out errors).</p>{verdict}")
+            + f"<p>Chosen: {html.escape(sel['reason'])}.</p>{band}{verdict}" + _heldout(sel))
+
+
+def _heldout(sel: dict) -> str:
+    """Per plateau: the nominal twin's and the chosen set's held-out η error side by side, and the chosen set's
+    95 % prediction interval at it."""
+    by = {tuple(c["params"]): c for c in sel["candidates"]}
+    nominal, chosen = by.get(()), by.get(tuple(sel["chosen"]))
+    pi = sel.get("prediction_interval")
+    if nominal is None or chosen is None or not pi or "plateau_labels" not in sel:
+        return ""
+    index = {lab: k for k, lab in enumerate(sel["plateau_labels"])}
+    rows = [[lab, f"{100 * nominal['cv_errors'][index[lab]]:+.2f}", f"{100 * chosen['cv_errors'][index[lab]]:+.2f}",
+             f"± {100 * pi['half_width_eta'][index[lab]]:.2f}"] for fold in sel["folds"] for lab in fold]
+    return ("<h3>Held-out η_v error per plateau, nominal and calibrated side by side</h3>"
+            + _table(["plateau (by fold)", "nominal [pt]", "+".join(sel["chosen"]) + " [pt]"
+                      if sel["chosen"] else "chosen: nominal [pt]", "95 % interval [pt]"], rows))
 
 
 def write_report(result: dict, path) -> Path:
     """Write the page; returns its path."""
     f = result["fit"]
-    params = _table(["parameter", "config field", "prior", "fitted", "95 % CI", "separately identifiable"],
+    params = _table(["parameter", "config field", "prior", "fitted", "parameter 95 % CI (not the twin's accuracy)",
+                     "separately identifiable"],
                     [[p["name"], p["field"], _scaled(p["prior"], p["unit"]), _scaled(p["value"], p["unit"]),
                       f"{_scaled(p['ci95'][0], p['unit'])} … {_scaled(p['ci95'][1], p['unit'])}",
                       _verdict(p, f)] for p in f["parameters"]])
@@ -98,13 +118,15 @@ def write_report(result: dict, path) -> Path:
     hold = (f"<p>Hold-out: fitted on {len(ho['train'])} plateaus; on the {len(ho['held_out'])} held out "
             f"({html.escape(', '.join(ho['held_out']))}) |η error| max {100 * ho['eta_error_prior']['max_abs']:.2f} pt "
             f"(prior) → {100 * ho['eta_error']['max_abs']:.2f} pt (fitted).</p>") if ho else ""
+    v = result.get("verdict")
+    verdict = f"<p><b>{html.escape(v['message'])}</b></p>" if v else ""
     page = f"""<!DOCTYPE html><html><head><meta charset="utf-8"><title>gerotor_twin calibration</title>
 <style>body{{font-family:sans-serif;font-size:14px;margin:2em}} table{{border-collapse:collapse;margin:1em 0}}
 td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}</style></head><body>
 <h1>Calibration from bench recordings or a steady map</h1>
 <p>Data: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
 {html.escape(result['model'])}; {len(result['plateau_records'])} plateaus; {result['date']}; {html.escape(result['software'])}.</p>
-{params}{combos}{notes}{hold}{_selection(result.get("selection"))}
+{verdict}{params}{combos}{notes}{hold}{_selection(result.get("selection"))}
 <img alt="efficiency error per plateau" src="data:image/png;base64,{_figure(result)}">
 {plateaus}
 <p>Residual variance factor s² = {f['residual_variance_factor']:.3g} (intervals are widened by √s² when the

@@ -13,9 +13,10 @@ mean squared error:
 .. math::
     \mathrm{SE}(\mathrm{RMSE}) = \frac{\mathrm{sd}(e_i^2)}{2\,\mathrm{RMSE}\,\sqrt{m}}
 
-The chosen set's held-out errors give the 95 % prediction band of a predicted efficiency,
-``± t₀.₉₇₅,m−1 · RMSE_cv``: it holds the model-form error the folds showed, not only the
-parameters' covariance.
+The chosen set's held-out errors give the model-form error of its predictions and with it the 95 %
+prediction interval of a predicted efficiency (:mod:`.prediction`: parameters ⊕ measurement ⊕ the
+model-form error the folds showed; with neither parameter nor measurement variance it is
+``± t₀.₉₇₅,m−1 · RMSE_cv``).
 
 The baseline is the law a spreadsheet fits to a map,
 
@@ -32,9 +33,9 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.stats import t as student_t
 
 from . import fit as C
+from . import prediction as P
 
 __all__ = ["folds", "resolve_scheme", "candidate_sets", "Candidate", "cross_validate", "baseline", "choose", "prediction_band",
            "CV_SCHEMES"]
@@ -62,11 +63,14 @@ def folds(records: list[PlateauRecord], scheme: str) -> list[np.ndarray]:
 
 
 def resolve_scheme(scheme: str, records: list) -> str:
-    """``"auto"`` → ``"speed"`` when the points have two speeds or more, else ``"point"``; others as given."""
+    """``"auto"`` → ``"speed"`` when the points have two speeds or more, else ``"point"`` (``"none"`` for a single
+    point); others as given."""
     from ..errors import InputError
     if scheme not in CV_SCHEMES + ("none", "auto"):
         raise InputError("--cv", scheme, "auto | speed | point | none")
     if scheme == "auto":
+        if len(records) < 2:
+            return "none"           # nothing to hold out: the fit is reported unchecked
         return "speed" if len(folds(records, "speed")) >= 2 else "point"
     if scheme == "speed" and len(folds(records, "speed")) < 2:
         raise InputError("--cv", scheme, "point or none for points at one speed", "leave-one-speed-out needs two speeds")
@@ -88,6 +92,14 @@ class Candidate:
     cv_errors: np.ndarray        #: each point's η error when its fold was held out [-]
     fit_errors: np.ndarray       #: each point's η error of the fit on all points [-]
     directions: int              #: identifiable directions of the fit on all points [-]
+    cv_param_var: np.ndarray | None = None   #: each held-out point's gᵀ Σ_x g of its fold's fit [-²] (None: 0)
+    cv_meas_var: np.ndarray | None = None    #: each point's measurement variance of η [-²] (None: 0)
+
+    def model_form(self, level: float = 0.95) -> P.ModelFormError:
+        """The model-form error its held-out errors show (:func:`.prediction.model_form_error`)."""
+        zero = np.zeros_like(self.cv_errors)
+        return P.model_form_error(self.cv_errors, zero if self.cv_param_var is None else self.cv_param_var,
+                                  zero if self.cv_meas_var is None else self.cv_meas_var, level)
 
     @property
     def cv_rmse(self) -> float:
@@ -104,7 +116,9 @@ class Candidate:
         return {"params": list(self.names), "directions": self.directions,
                 "fit_rmse": _rmse(self.fit_errors), "fit_max_abs": float(np.abs(self.fit_errors).max()),
                 "cv_rmse": self.cv_rmse, "cv_rmse_se": self.cv_rmse_se,
-                "cv_max_abs": float(np.abs(self.cv_errors).max()), "cv_errors": self.cv_errors.tolist()}
+                "cv_max_abs": float(np.abs(self.cv_errors).max()),
+                "cv_mean_abs": float(np.mean(np.abs(self.cv_errors))), "cv_errors": self.cv_errors.tolist(),
+                "model_form_sd_eta": self.model_form().sd}
 
 
 def _rmse(e: np.ndarray) -> float:
@@ -120,14 +134,18 @@ def cross_validate(ev: C.Evaluator, names, records, fold_index, displacement_m3:
     """Held-out η errors of fitting ``names`` (each fold fitted on the others), and the fit on all points."""
     names = tuple(names)
     cv = np.full(len(records), np.nan)
+    pv = np.zeros(len(records))
     for held in fold_index:
         out = set(held.tolist())
         train = [r for i, r in enumerate(records) if i not in out]
         test = [records[i] for i in held]
-        x = C.fit(ev, names, train, **opts).x
-        cv[held] = _eta_errors(test, ev.flows(names, [x], test)[0], displacement_m3)
+        fk = C.fit(ev, names, train, **opts)
+        q = ev.flows(names, [fk.x], test)[0]
+        cv[held] = _eta_errors(test, q, displacement_m3)
+        pv[held] = P.param_variance(P.eta_gradients(ev, names, fk.x, test, displacement_m3, q), fk.cov_x)
     fr = C.fit(ev, names, records, **opts)
-    cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(fr.analysis["groups"]))
+    cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(fr.analysis["groups"]),
+                     pv, P.measurement_variance(records, displacement_m3))
     say(f"  {'+'.join(names) or 'prior'}: fit RMSE {100 * _rmse(cand.fit_errors):.2f} pt, held-out RMSE {100 * cand.cv_rmse:.2f} pt")
     return cand, fr
 
@@ -154,10 +172,11 @@ def choose(cands: list[Candidate], noise: float = 0.0) -> tuple[Candidate, str]:
     return pick, why
 
 
-def prediction_band(cand: Candidate, level: float = 0.95) -> float:
-    """Half-width of the ``level`` prediction band of η_v from the held-out errors (module doc) [-]."""
-    m = cand.cv_errors.size
-    return float(student_t.ppf(0.5 + level / 2, max(m - 1, 1)) * cand.cv_rmse)
+def prediction_band(cand: Candidate, level: float = 0.95, param_var: float = 0.0, meas_var: float = 0.0) -> float:
+    """Half-width of the ``level`` prediction interval of η_v [-] at a point of parameter variance ``param_var``
+    and measurement variance ``meas_var`` [-²] (:mod:`.prediction`; the model-form error from the held-out
+    errors)."""
+    return float(cand.model_form(level).half_width(param_var, meas_var))
 
 
 def baseline(records, fold_index, displacement_m3: float, p_suction_default_pa: float) -> dict:

@@ -94,7 +94,8 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
     return {"config": str(out_dir / "pump_fitted.yaml"), "plateaus": len(res["plateau_records"]),
             "combinations": [{"label": c["label"], "factor": c["factor"], "factor_ci95": c["factor_ci95"]}
                              for c in f["combinations"]],
-            "eta_max_abs": f["eta_error"]["max_abs"],
+            "eta_max_abs": f["eta_error"]["max_abs"], "calibrated": res["verdict"]["calibrated"],
+            "verdict": res["verdict"]["message"],
             "note": thermometer_lag_note(res["plateau_records"], oil_sensor_tau_s)}
 
 

@@ -91,6 +91,8 @@ def _fit_cell(cal: dict | None) -> str:
         return ""
     if "error" in cal:
         return f"<td class='l'>not fitted: {_e(cal['error'])}</td>"
+    if cal.get("calibrated") is False:
+        return f"<td class='l'>nominal kept: {_e(cal['verdict'])}</td>"
     c = cal["combinations"][0] if cal["combinations"] else None
     if c is None:
         return "<td class='l'>nothing identifiable</td>"

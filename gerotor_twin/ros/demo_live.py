@@ -147,15 +147,21 @@ def _live_twin(args, log_dir: Path) -> Path | None:
 
 def calibration_note(pump_yaml) -> str:
     """What a pump file's ``calibration`` block says, in one line: bags, plateaus, the fitted clearance
-    factor(s) and the volumetric-efficiency RMSE before and after the fit; or that it has no such block."""
+    factor(s) with their parameter intervals, the volumetric-efficiency RMSE before and after the fit, the
+    prediction interval of η_v and a refused calibration; or that it has no such block."""
     cal = (load_yaml_file(pump_yaml) or {}).get("calibration")
     if not isinstance(cal, dict):
         return f"{pump_yaml}: no calibration block"
-    parts = [f"{c['combination']} x {c['factor']:.4f} (95 % CI {c['factor_ci95'][0]:.4f}-{c['factor_ci95'][1]:.4f})"
-             for c in cal.get("fitted_combinations", [])]
+    parts = [f"{c['combination']} x {c['factor']:.4f} (parameter 95 % CI {c['factor_ci95'][0]:.4f}-"
+             f"{c['factor_ci95'][1]:.4f})" for c in cal.get("fitted_combinations", [])]
     res = cal.get("residuals", {})
     if "eta_rmse" in res and "eta_rmse_prior" in res:
         parts.append(f"eta_v RMSE {100 * res['eta_rmse_prior']:.2f} -> {100 * res['eta_rmse']:.2f} %-pt")
+    pi = cal.get("prediction_interval")
+    if isinstance(pi, dict) and "eta_half_width_twin" in pi:
+        parts.append(f"eta_v predicted +- {100 * pi['eta_half_width_twin']:.2f} %-pt (95 %, model form included)")
+    if isinstance(cal.get("verdict"), dict) and cal["verdict"].get("calibrated") is False:
+        parts.append("calibration refused: the nominal values kept")
     return (f"{', '.join(cal.get('bags', []))}, {cal.get('plateaus', '?')} plateaus"
             + (": " + "; ".join(parts) if parts else ""))
 

@@ -1,0 +1,224 @@
+"""Calibration on pumps that differ from the twin in form: held-out errors and interval coverage (a measurement).
+
+``python -m gerotor_twin.offline.calibration_coverage [--pumps a,b] [--seeds 1,2,3] [--held-out 6] [--jobs 2]
+[--json F]``
+
+For each shipped bench pump (``config/bench_pumps/*.yaml``) and seed:
+
+1. **training plateaus**: a steady map of the bench pump (:mod:`gerotor_twin.calibration.bench_steady`: its
+   emulated pump in periodic steady state, read through its sensors' biases and noise) at :data:`TRAIN_RPM` ×
+   :data:`TRAIN_BAR`, the oil warming from 35 to 60 °C over the plateaus (:func:`train_points`) — the
+   operating points of a map recording;
+2. **calibration** as ``gerotor-twin calibrate --bench`` does it (``--params``, default tip and lateral, fitted
+   or the nominal values kept, chosen by leave-one-speed-out cross-validation: the nominal values are kept
+   when the fit does not predict the held-out speeds better), with its 95 % prediction interval
+   (:mod:`gerotor_twin.calibration.prediction`);
+3. **held-out plateaus**, never seen by the calibration: ``--held-out`` operating points drawn with the seed
+   uniformly over 800–2950 rpm, 3–27 bar, 40–60 °C oil, with their own noise draws; on each the error of the
+   nominal twin and of the calibrated twin, and whether the calibrated twin's 95 % interval holds its error.
+
+``--bags DIR`` does the same on recordings (:func:`evaluate_bags`: the ``map`` profile's recording fitted by
+``calibrate --bench``, the ``transient`` profile's plateaus held out; minutes per pump).
+
+Prints one row per pump and seed and the pooled coverage (docs/calibration_health.md, "Calibration on
+bench pumps that differ in form").  Seeds are fixed; nothing is asserted here (the tests,
+``test/test_calibration_form.py``, run a smaller version).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..bench_emulator.bench_pump import load_bench_pump
+from ..calibration import fit as C
+from ..calibration import prediction as P
+from ..calibration.bench_steady import SteadyBench, steady_plateaus
+from ..calibration.command import calibrate_records
+from ..calibration.fit_model import parse_params
+from ..config import load_config
+from ..errors import InputError, check_range
+from ..resources import resource_path
+
+__all__ = ["TRAIN_RPM", "TRAIN_BAR", "shipped_pumps", "train_points", "held_out_points", "evaluate", "evaluate_bags",
+           "judge", "run", "main"]
+
+TRAIN_RPM = (1000.0, 1900.0, 2800.0)     #: speeds of the training map [rpm]
+TRAIN_BAR = (5.0, 14.0, 24.0)            #: delivery pressures of the training map, gauge [bar]
+TRAIN_OIL_C = (35.0, 60.0)               #: oil temperature at the first and the last plateau of the map [°C]
+HELD_RPM = (800.0, 2950.0)               #: range of the held-out speeds [rpm]
+HELD_BAR = (3.0, 27.0)                   #: range of the held-out delivery pressures, gauge [bar]
+HELD_OIL_C = (40.0, 60.0)                #: range of the held-out oil temperatures [°C]
+
+
+def shipped_pumps() -> list[Path]:
+    """The shipped bench pump files, sorted by name."""
+    return sorted(resource_path("config", "bench_pumps").glob("*.yaml"))
+
+
+def train_points(p_atm: float) -> list[tuple[float, float, float]]:
+    """The training map in the order a recording runs it (pressures up at one speed, down at the next) with the
+    oil warming linearly from the first plateau to the last: (speed [rad/s], delivery [Pa abs], oil [°C])."""
+    order = [(rpm, bar) for k, rpm in enumerate(TRAIN_RPM) for bar in (TRAIN_BAR if k % 2 == 0 else TRAIN_BAR[::-1])]
+    oil = np.linspace(*TRAIN_OIL_C, len(order))
+    return [(rpm * math.pi / 30, p_atm + bar * 1e5, float(t)) for (rpm, bar), t in zip(order, oil)]
+
+
+def held_out_points(seed: int, n: int, p_atm: float) -> list[tuple[float, float, float]]:
+    """``n`` operating points drawn with ``seed``: (speed [rad/s], delivery [Pa abs], oil [°C])."""
+    rng = np.random.default_rng([seed, 28])
+    return [(rng.uniform(*HELD_RPM) * math.pi / 30, p_atm + rng.uniform(*HELD_BAR) * 1e5, rng.uniform(*HELD_OIL_C))
+            for _ in range(n)]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One evaluation: a bench pump, a seed and the calibration's options."""
+    pump: Path
+    seed: int
+    held_out: int = 6
+    params: tuple = ("tip", "lateral")
+    candidates: tuple | None = None      #: None: ``params`` as one set (``calibrate --bench``'s default)
+
+
+def evaluate(case: Case, jobs: int | None = None) -> dict:
+    """Calibrate on the training map of ``case`` and judge it on its held-out plateaus (module doc)."""
+    cfg = load_config()
+    bench = SteadyBench.of(load_bench_pump(case.pump))
+    p_atm = cfg.fluid.atmospheric_pa
+    train_pts = train_points(p_atm)
+    name = bench.bench_pump.name
+    train = steady_plateaus(bench, train_pts, seed=case.seed, source=f"{name}-map")
+    held = steady_plateaus(bench, held_out_points(case.seed, case.held_out, p_atm), seed=case.seed + 10_000,
+                           source=f"{name}-held-out")
+    res = calibrate_records(train, [f"{name}-map"], params=case.params, cv="speed", jobs=jobs,
+                            candidates=case.candidates or (case.params,))
+    return {"seed": case.seed, **judge(res, held, name, jobs)}
+
+
+def judge(res: dict, held: list, name: str, jobs: int | None = None) -> dict:
+    """The calibration result ``res`` (:func:`~gerotor_twin.calibration.command.calibrate_records`, cross-validated)
+    on the held-out plateaus ``held``: nominal and calibrated errors, the interval's coverage."""
+    cfg = load_config()
+    sel = res["selection"]
+    chosen = next(c for c in sel["candidates"] if c["params"] == sel["chosen"])
+    form = P.ModelFormError(chosen["model_form_sd_eta"], len(chosen["cv_errors"]))
+    names = tuple(res["params"])
+    x = np.array([p["log_factor"] for p in res["fit"]["parameters"]])
+    cov = np.array(res["fit"]["cov_x"]) if names else np.zeros((0, 0))
+    d = cfg.gears.displacement_closed_form()
+    with C.Evaluator(cfg.to_dict(), res["model"], jobs) as ev:
+        fitted = P.predict(ev, names, x, cov, held, d, form)
+        nominal = P.predict(ev, (), np.zeros(0), np.zeros((0, 0)), held, d, form)
+    e1 = np.array([r["eta_error"] for r in fitted])
+    e0 = np.array([r["eta_error"] for r in nominal])
+    return {"pump": name, "chosen": sel["chosen"], "verdict": res["verdict"]["message"],
+            "calibrated": res["verdict"]["calibrated"],
+            "parameters": {p["name"]: p["value"] for p in res["fit"]["parameters"]},
+            "cv_nominal_rmse": res["verdict"]["nominal_heldout_rmse"], "cv_chosen_rmse": chosen["cv_rmse"],
+            "model_form_sd_eta": form.sd,
+            "nominal_mean_abs": float(np.mean(np.abs(e0))), "nominal_max_abs": float(np.max(np.abs(e0))),
+            "fitted_mean_abs": float(np.mean(np.abs(e1))), "fitted_max_abs": float(np.max(np.abs(e1))),
+            "covered": int(sum(r["covered"] for r in fitted)), "held_out": len(fitted),
+            "half_width_rms": float(np.sqrt(np.mean([r["half_width_eta"] ** 2 for r in fitted]))),
+            "plateaus": fitted, "plateaus_nominal": nominal, "simulations": res["simulations"]}
+
+
+def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None) -> dict:
+    """The same on recordings (minutes per pump): ``synth-bench --bench-pump`` makes the ``map`` profile's
+    recording (seed ``seed``) and the ``transient`` profile's (seed ``seed`` + 1); ``calibrate --bench`` fits the
+    map recording (its default candidates; the bench pump's thermometer lag undone, ``--oil-sensor-tau``), and
+    the transient recording's plateaus are held out."""
+    from ..bench_emulator import BenchSpec, get_profile, synthesize
+    from ..calibration.command import calibrate_bags
+    from ..calibration.plateaus import DetectorSettings, bench_plateaus
+    bp = load_bench_pump(pump)
+    spec = bp.bench_spec(BenchSpec(seed=seed))
+    out.mkdir(parents=True, exist_ok=True)
+    bags = {}
+    for k, profile in enumerate(("map", "transient")):
+        bags[profile] = out / f"{bp.name}_{profile}_{seed + k}.mcap"
+        if not bags[profile].exists():
+            from dataclasses import replace
+            synthesize(get_profile(profile), bags[profile], replace(spec, seed=seed + k), bench_pump=bp, progress=None)
+    det = DetectorSettings(oil_sensor_tau_s=spec.temperature_tau_s)
+    res = calibrate_bags([bags["map"]], detector=det, params=("tip", "lateral"), cv="auto",
+                         candidates=[("tip", "lateral")], jobs=jobs)
+    held = bench_plateaus(bags["transient"], det)
+    return {"seed": seed, "bags": {k: str(v) for k, v in bags.items()}, **judge(res, held, bp.name, jobs)}
+
+
+def _pt(v: float) -> str:
+    return f"{100 * v:.2f}"
+
+
+def run(cases: list[Case], jobs: int | None = None, out=None, bags_dir: Path | None = None) -> dict:
+    """Evaluate every case (on recordings in ``bags_dir`` when given: :func:`evaluate_bags`), printing a markdown
+    row for each; the rows and the pooled coverage."""
+    out = out or sys.stdout
+    print("| bench pump | seed | chosen set | held-out mean \\|η err\\| nominal → calibrated (max) [pt] "
+          "| 95 % interval, RMS half-width [pt] | held-out plateaus inside |", file=out)
+    print("|---|---|---|---|---|---|", file=out)
+    rows = []
+    for case in cases:
+        t0 = time.perf_counter()
+        r = evaluate(case, jobs) if bags_dir is None else evaluate_bags(case.pump, case.seed, bags_dir, jobs)
+        r["wall_s"] = time.perf_counter() - t0
+        rows.append(r)
+        print(f"| `{r['pump']}` | {r['seed']} | {'+'.join(r['chosen']) or 'none (nominal kept)'} | "
+              f"{_pt(r['nominal_mean_abs'])} ({_pt(r['nominal_max_abs'])}) → {_pt(r['fitted_mean_abs'])} "
+              f"({_pt(r['fitted_max_abs'])}) | ± {_pt(r['half_width_rms'])} | {r['covered']}/{r['held_out']} |",
+              file=out, flush=True)
+    covered, total = sum(r["covered"] for r in rows), sum(r["held_out"] for r in rows)
+    print(f"pooled: the 95 % interval holds {covered} of {total} held-out plateaus "
+          f"({100 * covered / max(total, 1):.0f} %)", file=out)
+    return {"rows": rows, "covered": covered, "held_out": total}
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m gerotor_twin.offline.calibration_coverage", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--pumps", default=None, help="bench pump names, comma-separated (default: every shipped one)")
+    p.add_argument("--seeds", default="1,2,3", help="seeds, comma-separated (default 1,2,3)")
+    p.add_argument("--held-out", type=int, default=6, help="held-out plateaus per pump and seed (default 6)")
+    p.add_argument("--params", default="tip,lateral", help="largest candidate set (default tip,lateral)")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--json", default=None, help="write every row (per plateau too) to this file")
+    p.add_argument("--bags", default=None, metavar="DIR",
+                   help="on recordings instead (made in DIR if absent: map profile fitted, transient held out; "
+                        "minutes per pump and seed)")
+    args = p.parse_args(argv)
+    try:
+        files = {f.stem: f for f in shipped_pumps()}
+        names = list(files) if args.pumps is None else [s.strip() for s in args.pumps.split(",") if s.strip()]
+        for n in names:
+            if n not in files:
+                raise InputError("--pumps", n, ", ".join(files))
+        seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
+        if not seeds:
+            raise InputError("--seeds", args.seeds, "comma-separated integers")
+        check_range("--held-out", args.held_out, 1, 1000)
+        params = parse_params(args.params)
+    except ValueError:
+        p.error(f"--seeds = {args.seeds!r} is invalid; allowed: comma-separated integers")
+    except InputError as e:
+        p.error(str(e))
+    t0 = time.perf_counter()
+    cases = [Case(files[n], s, args.held_out, params) for n in names for s in seeds]
+    result = run(cases, args.jobs, bags_dir=None if args.bags is None else Path(args.bags))
+    print(f"{len(cases)} cases in {time.perf_counter() - t0:.0f} s")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv), **result},
+                                              indent=1, default=float))
+        print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

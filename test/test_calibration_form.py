@@ -1,0 +1,158 @@
+"""Calibration on pumps that differ from the twin in form (issue 28): never worse than the nominal twin, and
+prediction intervals that hold the model-form error.
+
+Tiers: closed form (the model-form error from held-out errors, the interval's parts, the hold-out verdict,
+the steady bench's readings); behaviour (the shipped bench pumps on a steady bench,
+:mod:`gerotor_twin.calibration.bench_steady`: the calibration refuses where fitting makes the held-out
+predictions worse, and the 95 % prediction interval holds ≥ 90 % of held-out plateaus).  Steady plateaus, not
+recordings, so each test stays within ≈ 20 s (a recording of the same plateaus takes ≈ 45 s to synthesize);
+the full figures: ``python -m gerotor_twin.offline.calibration_coverage``.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+import yaml
+from scipy.stats import t as student_t
+
+from gerotor_twin.bench_emulator import BenchSpec, load_bench_pump
+from gerotor_twin.bench_emulator.bench_pump import BenchPump
+from gerotor_twin.calibration import prediction as P
+from gerotor_twin.calibration.bench_steady import SteadyBench, steady_plateaus
+from gerotor_twin.calibration.command import holdout_verdict
+from gerotor_twin.calibration.map_synth import write_map
+from gerotor_twin.cli import main
+from gerotor_twin.config import load_config
+from gerotor_twin.offline import calibration_coverage as cov
+
+PUMPS = {p.stem: p for p in cov.shipped_pumps()}
+#: one seed per bench pump: three fixed seeds over the three pumps
+SEEDS = {"aerated_oil_sensor_lag": 1, "port_timing_lateral_bias": 2, "worn_tips_flow_number": 3}
+
+
+def test_model_form_error_and_interval_closed_form():
+    """Closed form: held-out errors ±1, ±2 pt with a parameter variance of (0.316 pt)² each and no measurement
+    variance → σ_d² = mean(e²) − 1e-5 = 2.5e-4 − 1e-5; the half-width at a point of parameter variance 4e-6 and
+    measurement variance 1e-6 is t(0.975, 3)·√(4e-6 + 1e-6 + σ_d²); errors smaller than the parameters'
+    share give σ_d = 0 (not negative); a fold whose covariance is undefined (NaN) counts none."""
+    e = np.array([0.01, -0.01, 0.02, -0.02])
+    form = P.model_form_error(e, np.full(4, 1e-5), np.zeros(4))
+    assert form.sd ** 2 == pytest.approx(2.5e-4 - 1e-5, rel=1e-12) and form.held_out == 4 and form.dof == 3
+    assert form.half_width(4e-6, 1e-6) == pytest.approx(student_t.ppf(0.975, 3) * math.sqrt(5e-6 + form.sd ** 2))
+    assert P.model_form_error(np.array([1e-4, -1e-4]), np.full(2, 1e-6), np.zeros(2)).sd == 0.0
+    # a fold without residual degrees of freedom (NaN covariance): its whole error is model form
+    assert P.model_form_error(e, np.array([np.nan, np.nan, 1e-5, 1e-5]), np.zeros(4)).sd ** 2 == \
+        pytest.approx(2.5e-4 - 0.5e-5, rel=1e-12)
+    g = np.array([[1.0, 0.0], [0.5, 2.0]])
+    cov_x = np.array([[4.0, 1.0], [1.0, 9.0]])
+    assert P.param_variance(g, cov_x).tolist() == pytest.approx([4.0, 0.25 * 4 + 2 * 0.5 * 2 * 1 + 4 * 9])
+
+
+def test_holdout_verdict_closed_form():
+    """Closed form (``--cv none``): the fit is kept only when its held-out η RMSE is below the nominal twin's;
+    the message is one line saying which and why, with both figures."""
+    def ho(fit, nominal):
+        rows = lambda e: [{"eta_error": v} for v in e]          # noqa: E731
+        stats = lambda e: {"rmse": float(np.sqrt(np.mean(np.square(e)))), "max_abs": float(np.max(np.abs(e)))}  # noqa: E731
+        return {"held_out": ["b#2", "b#4"], "plateaus": rows(fit), "plateaus_prior": rows(nominal),
+                "eta_error": stats(fit), "eta_error_prior": stats(nominal)}
+    worse = holdout_verdict(ho([0.008, -0.009], [0.004, 0.005]), ("tip", "lateral"))
+    assert not worse["calibrated"] and worse["chosen"] == [] and "\n" not in worse["message"]
+    assert worse["message"].startswith("calibration refused") and "nominal values are kept" in worse["message"]
+    assert "fitted 0.85 / 0.85 pt, nominal 0.45 / 0.45 pt" in worse["message"]
+    better = holdout_verdict(ho([0.001, -0.001], [0.004, 0.005]), ("tip", "lateral"))
+    assert better["calibrated"] and better["message"].startswith("calibration accepted: tip+lateral")
+    unchecked = holdout_verdict(None, ("tip",))
+    assert unchecked["calibrated"] and not unchecked["checked"]
+
+
+def test_steady_bench_readings_closed_form():
+    """Closed form: a steady plateau reads the emulated pump's flow through the sensor biases (speed, delivery
+    pressure, oil, flow added exactly) with a flow noise draw of the standard error √(σ_abs² + (σ_rel Q)²)/√40,
+    and the suction pressure of the emulator's suction line, p_atm − Δp_s (ω/ω_max)²."""
+    bp = BenchPump(name="biased", sensors={"speed_bias_rad_s": 0.2, "pressure_bias_pa": 1.5e4,
+                                           "flow_bias_m3s": -8e-7, "temperature_bias_c": 1.0})
+    bench = SteadyBench.of(bp, base=BenchSpec(clearance_factor=1.3))
+    assert bench.spec.clearance_factor == 1.0           # a bench pump sets its clearances itself
+    omega, p_d, t_c = 1500 * math.pi / 30, 101325.0 + 10e5, 45.0
+    (r,) = steady_plateaus(bench, [(omega, p_d, t_c)], seed=4)
+    q = bench.true_flow(omega, p_d, t_c)
+    sem = math.hypot(1e-6, 0.003 * q) / math.sqrt(40)
+    assert (r.omega, r.p_delivery_pa, r.oil_temperature_c) == pytest.approx((omega + 0.2, p_d + 1.5e4, 46.0))
+    assert r.flow_sem_m3s == pytest.approx(sem) and abs(r.flow_m3s - (q - 8e-7)) < 4 * sem
+    assert r.p_suction_pa == pytest.approx(101325.0 - 5000.0 * (1500 / 3000) ** 2)
+
+
+def test_calibrate_refuses_when_fitting_makes_held_out_worse(tmp_path, capsys):
+    """Behaviour (known truth): a steady map at 50 °C of the bench pump with 0.8 % free air and a lower port Cd
+    (``aerated_oil_sensor_lag``; its clearances are nominal) read as ``calibrate --map``.  The clearances fitted
+    on two speeds bend to absorb the air's filling loss and predict the third worse than the nominal twin
+    (measured 2026-12-05 at 08611a9: held-out η RMSE 0.61 pt nominal, 0.67 pt fitted, max 0.69 → 1.25 pt); the command
+    says so in one line, keeps the nominal values, exits 0 with the verdict in its JSON and shows the nominal
+    and the fitted held-out errors side by side."""
+    bench = SteadyBench.of(load_bench_pump(PUMPS["aerated_oil_sensor_lag"]))
+    pts = [(rpm * math.pi / 30, bench.p_atm_pa + bar * 1e5, 50.0) for rpm in (1000, 1900, 2800) for bar in (5, 22)]
+    csv = write_map(tmp_path / "aerated.csv", steady_plateaus(bench, pts, seed=1), bench.p_atm_pa)
+    out, js, page = tmp_path / "fitted.yaml", tmp_path / "fit.json", tmp_path / "fit.html"
+    assert main(["calibrate", "--map", str(csv), "--params", "tip,lateral", "--candidates", "tip,lateral",
+                 "-o", str(out), "--json", str(js), "--report", str(page), "--jobs", "2", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    res = json.loads(js.read_text())
+    by = {"+".join(c["params"]): c for c in res["selection"]["candidates"]}
+    assert by["tip+lateral"]["cv_rmse"] > by[""]["cv_rmse"]                 # the premise: fitting is worse held out
+    assert by["tip+lateral"]["cv_max_abs"] > by[""]["cv_max_abs"]
+    refusal = [ln for ln in text.splitlines() if ln.startswith("calibration refused")]
+    assert len(refusal) == 1 and "nominal values are kept" in refusal[0]
+    assert f"nominal {100 * by['']['cv_mean_abs']:.2f} / {100 * by['']['cv_rmse']:.2f} pt" in refusal[0]
+    assert res["verdict"]["calibrated"] is False and res["params"] == [] and res["selection"]["chosen"] == []
+    nominal, fitted = load_config(), load_config(out)
+    assert fitted.clearances.tooth_tip_m == nominal.clearances.tooth_tip_m
+    assert fitted.clearances.lateral_m == nominal.clearances.lateral_m
+    assert yaml.safe_load(out.read_text())["calibration"]["verdict"]["calibrated"] is False
+    assert "prior (nothing fitted)" in text and "tip+lateral" in text and "held-out RMSE" in text
+    html = page.read_text()
+    assert "calibration refused" in html and "nominal and calibrated side by side" in html
+
+
+_RESULTS: dict[str, dict] = {}
+
+
+def _evaluated(name: str) -> dict:
+    if name not in _RESULTS:
+        _RESULTS[name] = cov.evaluate(cov.Case(PUMPS[name], SEEDS[name], held_out=6), jobs=2)
+    return _RESULTS[name]
+
+
+@pytest.mark.parametrize("name", sorted(SEEDS))
+def test_bench_pump_never_worse_than_nominal(name):
+    """Behaviour (known truth, each shipped bench pump on a steady bench, one fixed seed): calibrated on a
+    map's nine plateaus (3 speeds × 3 pressures, oil warming 35 → 60 °C), the twin predicts six other plateaus
+    (800–2950 rpm, 3–27 bar, 40–60 °C) no worse than the nominal twin on average; where the bench pump's
+    leakage paths differ from the nominal ones (``port_timing_lateral_bias``, ``worn_tips_flow_number``) the
+    calibration is accepted and meets the issue's goal, held-out mean |η error| ≤ 0.5 pt and max ≤ 1 pt
+    (measured 2026-12-05 at e81fa71: 9.96 → 0.03 and 2.85 → 0.04 pt mean).  The aerated pump's fitted gaps
+    predict the held-out speeds no better than its nominal ones beyond the noise, so its calibration is
+    refused: the clearances cannot make its air's filling loss."""
+    r = _evaluated(name)
+    assert r["fitted_mean_abs"] <= r["nominal_mean_abs"] + 1e-12, r["verdict"]
+    assert r["calibrated"] == bool(r["chosen"])
+    if name != "aerated_oil_sensor_lag":
+        assert r["calibrated"], r["verdict"]
+        assert r["fitted_mean_abs"] <= 0.005 and r["fitted_max_abs"] <= 0.01, r
+
+
+def test_prediction_interval_coverage_over_bench_pumps():
+    """Behaviour (known truth): over the three shipped bench pumps (seeds 1, 2, 3; six held-out plateaus each),
+    the calibrated twin's 95 % prediction interval holds the held-out η error on ≥ 90 % of the 18 held-out
+    plateaus (measured 2026-12-05 at e81fa71: 18 of 18).  With the parameter covariance alone (no model-form
+    term) the aerated pump's intervals (≈ ± 0.2 pt of measurement) hold none of its 0.5–0.7 pt errors: the
+    figure fails when the model-form term is dropped, checked here on the same plateaus."""
+    rows = [_evaluated(n) for n in sorted(SEEDS)]
+    covered = sum(r["covered"] for r in rows)
+    total = sum(r["held_out"] for r in rows)
+    assert total == 18 and covered >= math.ceil(0.9 * total), [(r["pump"], r["covered"]) for r in rows]
+    no_form = sum(abs(p["eta_error"]) <= P.ModelFormError(0.0, 9).half_width(p["sd_param_eta"] ** 2,
+                                                                              p["sd_meas_eta"] ** 2)
+                  for r in rows for p in r["plateaus"])
+    assert no_form < math.ceil(0.9 * total)
