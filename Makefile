@@ -1,6 +1,6 @@
 # gerotor_twin — the two commands a newcomer needs:
 #   make demo   set up .venv, install everything, run the main job
-#   make test   same set-up, then the whole test suite
+#   make test   same set-up, then the whole test suite on every core (pytest-xdist)
 # `make setup` also compiles the model's numba kernels once (python -m gerotor_twin.precompile: the
 # mobility and fixed-centre models, 40-80 s on 2 shared cores) into the on-disk cache, so no first
 # start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 5-25 s, with a line saying so);
@@ -77,8 +77,11 @@ bench-accuracy: $(STAMP)
 	$(VENV)/bin/gerotor-twin bench accuracy --rpm 1000,2000,3000 --bar 5,15,27.5 --models mobility,fixed \
 	    --json out/bench/accuracy.json --write-doc docs/numerics.md
 
+# the suite on every core (pytest-xdist, one worker per core; a test file stays on one worker, so its module
+# fixtures are built once); `make test XDIST=` runs it in one process
+XDIST ?= -n auto --dist loadfile
 test: $(STAMP) chromium
-	$(PY) -m pytest -q --durations=15 test
+	$(PY) -m pytest -q $(XDIST) --durations=15 test
 
 # headless Chromium for the report-rendering test (Debian package; installed when root)
 chromium:
@@ -87,7 +90,7 @@ chromium:
 	  else echo "note: chromium missing (sudo apt-get install chromium); its report test is skipped"; fi; }
 
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -m "not slow" test
+	$(PY) -m pytest -q $(XDIST) -m "not slow" test
 
 clean:
 	rm -rf $(VENV) out build *.egg-info

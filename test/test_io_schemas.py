@@ -11,6 +11,7 @@ clear errors.
 from __future__ import annotations
 
 import json
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -64,15 +65,24 @@ def test_type_hash_matches_json_and_rosbags(msgtype: str):
     assert store.hash_rihs01(msgtype) == d.type_hash
 
 
-def test_search_path_cache_and_unknown_types(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
-    msg_dir = tmp_path / "share" / "bench_msgs" / "msg"
+@pytest.fixture
+def short_tmp():
+    """A temporary directory with a short path: an error's reason is clipped at 120 characters
+    (``errors.clip``), and pytest's ``tmp_path`` (longer still under xdist, ``.../popen-gw1/...``)
+    would cut off the directory the message names."""
+    with tempfile.TemporaryDirectory(prefix="gt") as d:
+        yield Path(d)
+
+
+def test_search_path_cache_and_unknown_types(short_tmp: Path, monkeypatch: pytest.MonkeyPatch):
+    msg_dir = short_tmp / "share" / "bench_msgs" / "msg"
     msg_dir.mkdir(parents=True)
     (msg_dir / "Pair.msg").write_text("float64 a\nInner inner\nbench_msgs/Missing[] m\n")
     (msg_dir / "Inner.msg").write_text("int32 k\n")
-    monkeypatch.setenv("AMENT_PREFIX_PATH", str(tmp_path))
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(short_tmp))
     schemas.clear_cache()
     try:
-        assert schemas.share_dirs()[0] == tmp_path / "share"
+        assert schemas.share_dirs()[0] == short_tmp / "share"
         with pytest.raises(schemas.UnknownMessageType, match=r"bench_msgs/msg/Pair.*uses "
                            r"bench_msgs/Missing.*no bench_msgs/msg/Missing.msg"):
             schemas.message_definition("bench_msgs/msg/Pair")

@@ -190,10 +190,14 @@ def test_node_and_run_bag_agree(tmp_path):
     from gerotor_twin.io import McapReadError
     from gerotor_twin.offline.health_log import load_health
     res = build_report(bag, [node_log, off], tmp_path / "r.html", labels=["node", "run-bag"])
-    try:
-        health = len(load_health(node_log)[1]) + len(load_health(off)[1]) > 0
-    except McapReadError:       # no twin/health messages (too short to settle)
-        health = False
+    def updates(log):
+        try:
+            return len(load_health(log)[1])
+        except McapReadError:   # no twin/health messages (too short to settle)
+            return 0
+    # the report draws the health plots when either twin has updates (on this short bag one log can have a
+    # few where the other has none: the node's model starts at its first tick, later on a busy machine)
+    health = updates(node_log) + updates(off) > 0
     # speed, pressure, oil T, flow, error, η (+ reference efficiency and leakage factor with health updates)
     assert res["figures_drawn"] == 5 and res["interactive_plots"] == 6 + 2 * health and len(res["plateaus"]) == 1
     a, b = (t["overall"]["flow_error_m3s"]["bias"] for t in res["twins"])

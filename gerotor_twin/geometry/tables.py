@@ -238,7 +238,7 @@ def cached_tables(g: GerotorGeometry, suction: Port, delivery: Port, size: int =
     t = build_tables(g, suction, delivery, size, progress)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp.npz")
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")    # one per process (parallel builders)
         np.savez(tmp, data=t.data)
         os.replace(tmp, path)
     except OSError:
