@@ -14,7 +14,7 @@ __all__ = ["realtime", "family_realtime", "models_cost", "advance_in_calls"]
 
 def advance_in_calls(model, state, seconds: float, inputs, call_s: float | None = None):
     """``model`` advanced by ``seconds`` [s] from ``state`` in one ``advance`` call (``call_s`` None), or in calls of
-    ``call_s`` [s] of model time each, as the node makes them (one per input sample); returns the last state."""
+    ``call_s`` [s] of model time each, as the node makes them (one per sample period); returns the last state."""
     if not call_s:
         return model.advance(state, seconds, inputs)[0]
     calls = max(1, int(round(seconds / call_s)))
