@@ -180,6 +180,71 @@ def test_thermometer_lag_note():
     assert thermometer_lag_note([{"oil_slope_k_s": float("nan")}], 0.0) is None
 
 
+def _lagged_bins(u, tau, dt, t_end, sub=200):
+    """Bin means over [0, t_end) of a first-order-lag sensor (τ ẏ = u − y, y(0) = u(0)) reading u(t), integrated
+    exactly for a piecewise-linear u on a fine grid (the lag's exact update for an input linear over a step)."""
+    h = dt / sub
+    n = int(round(t_end / h))
+    y = np.empty(n + 1)
+    y[0] = u(0.0)
+    a = np.exp(-h / tau)
+    for k in range(n):
+        u0, u1 = u(k * h), u((k + 1) * h)
+        s = (u1 - u0) / h                               # y' = (u − y)/τ with u = u0 + s t over the step
+        y[k + 1] = u1 - s * tau + (y[k] - u0 + s * tau) * a
+    mid = 0.5 * (y[:-1] + y[1:])                        # trapezoid within each fine step
+    return mid.reshape(-1, sub).mean(axis=1)
+
+
+def test_lag_undone_mean_closed_form():
+    """Closed form: a flow meter with a first-order lag (τ = 0.5 s) reads a step from 10 to 20 at t = 0 s; on the
+    plateau window 1–3 s (bins of 0.1 s) the reading is still e⁻² of the step behind at its start, and the plain
+    mean is 10·τ/T·(e⁻² − e⁻⁶) = 0.33 low; the mean with the lag undone, ȳ + τ(y(b) − y(a))/(b − a), is exact but
+    for the edge reading's linear extrapolation from two bin means, whose error for a curvature y'' is
+    y''·dt²/3 (the bins' means of a parabola), so |ū − 20| ≤ τ/T·10e⁻²/τ²·dt²/3 = 0.0045 (measured 0.0038).
+    A ramp u = 10 + 2t read through the lag at its steady lag (y = u − 2τ): the plain mean is 2τ = 1 low, the lag
+    undone exact.  τ = 0: the plain mean and its standard error; τ > 0 adds the edges' noise to it."""
+    from gerotor_twin.calibration.plateaus import lag_undone_mean, mean_standard_error
+    tau, dt = 0.5, 0.1
+    step = _lagged_bins(lambda t: 20.0, tau, dt, 3.0)
+    step_from_10 = _lagged_bins(lambda t: 10.0 if t <= 0 else 20.0, tau, dt, 3.0)
+    v = step_from_10[10:]                                        # the window 1–3 s
+    plain, _ = lag_undone_mean(v, dt, 0.0)
+    undone, sem = lag_undone_mean(v, dt, tau)
+    assert step[0] == pytest.approx(20.0)
+    assert 20.0 - plain == pytest.approx(10 * tau / 2.0 * (np.exp(-2) - np.exp(-6)), rel=0.01)
+    assert abs(undone - 20.0) <= tau / 2.0 * 10 * np.exp(-2) / tau ** 2 * dt ** 2 / 3
+    assert sem > mean_standard_error(v, dt) >= 0.0
+    ramp = 10.0 + 2.0 * (np.arange(30) + 0.5) * dt - 2.0 * tau  # the lagged ramp's bin means, closed form
+    plain, _ = lag_undone_mean(ramp[10:], dt, 0.0)
+    undone, _ = lag_undone_mean(ramp[10:], dt, tau)
+    truth = 10.0 + 2.0 * 2.0                                     # u's mean over 1–3 s
+    assert plain == pytest.approx(truth - 1.0) and undone == pytest.approx(truth, abs=1e-12)
+    noisy = 20.0 + np.random.default_rng(3).normal(0.0, 0.2, 20)
+    m0, s0 = lag_undone_mean(noisy, dt, 0.0)
+    m1, s1 = lag_undone_mean(noisy, dt, tau)
+    assert (m0, s0) == (float(noisy.mean()), mean_standard_error(noisy, dt))
+    assert s1 == pytest.approx(np.hypot(s0, tau / 2.0 * np.sqrt(5.0 * np.var(np.diff(noisy), ddof=1) / 2)))
+
+
+def test_evaluator_shares_runs_across_sets_and_edge_losses(bags):
+    """Closed form (the edge losses, :mod:`gerotor_twin.model.volumetric`): flows with k_D = 0.95 are those with
+    k_D = 1 less 0.05·D·n exactly, and come from the same runs (no new simulation); asked again, nothing runs."""
+    import math
+
+    from gerotor_twin.calibration import fit as C
+    recs = bench_plateaus(bags[FACTORS[0]][0], DETECTOR)[:2]
+    with C.Evaluator(load_config().to_dict(), "mobility", jobs=1) as ev:
+        q1 = ev.flows(("displacement",), [np.zeros(1)], recs)[0]
+        runs = ev.simulated
+        q95 = ev.flows(("displacement",), [np.array([math.log(0.95)])], recs)[0]
+        assert ev.simulated == runs == len(recs)
+        d = load_config().gears.displacement_closed_form()
+        deficit = np.array([0.05 * d * r.omega / (2 * math.pi) for r in recs])
+        assert q1 - q95 == pytest.approx(deficit, rel=1e-9)
+        assert ev.flows((), [np.zeros(0)], recs)[0] == pytest.approx(q1, rel=1e-15) and ev.simulated == runs
+
+
 def test_cli_end_to_end(bags, tmp_path, capsys):
     """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability and, by
     default cross-validated across speeds, whether the fit beats the nominal twin on held-out plateaus."""
@@ -203,7 +268,8 @@ def test_cli_end_to_end(bags, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, field", [
     (["--params", "tip,bogus"], "--params"), (["--params", ""], "--params"), (["--model", "x"], "--model"),
-    (["--holdout", "1"], "--holdout"), (["--jobs", "0"], "--jobs"), (["--settle-s", "nan"], "--settle-s")])
+    (["--holdout", "1"], "--holdout"), (["--jobs", "0"], "--jobs"), (["--settle-s", "nan"], "--settle-s"),
+    (["--flow-sensor-tau", "-1"], "--flow-sensor-tau"), (["--flow-sensor-tau", "nan"], "--flow-sensor-tau")])
 def test_bad_input_one_line(bags, tmp_path, capsys, argv, field):
     """Bad input: one line naming the field, exit 2, nothing written."""
     out = tmp_path / "p.yaml"

@@ -20,7 +20,7 @@ import yaml
 
 from .. import __version__
 from ..config import load_config, parse_config
-from ..errors import InputError
+from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
 from .fit_model import apply, parse_params
@@ -35,7 +35,14 @@ MAP_PARAMS = ("tip", "lateral", "displacement", "bypass")
 MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"),
                   ("tip", "lateral", "bypass"), ("tip", "lateral", "displacement", "bypass"))
 
-__all__ = ["calibrate_bags", "calibrate_map", "calibrate_records", "MAP_PARAMS", "fitted_config", "cmd_calibrate", "add_parser"]
+#: the candidate sets ``--bench`` compares by default (the prior besides): the gaps, the effective displacement
+#: alone and with the gaps (a pump that differs from the twin in form: free air, another port law, tolerances of
+#: the profiles take a share of the flow at every speed that no clearance makes, docs/calibration_health.md)
+BENCH_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"))
+#: the largest flow meter lag ``--flow-sensor-tau`` accepts [s]
+FLOW_SENSOR_TAU_MAX_S = 60.0
+
+__all__ = ["calibrate_bags", "calibrate_map", "calibrate_records", "MAP_PARAMS", "BENCH_CANDIDATES", "fitted_config", "cmd_calibrate", "add_parser"]
 
 
 def _fit_summary(fr: C.FitResult, raw: dict, records, displacement: float) -> dict:
@@ -381,14 +388,14 @@ def print_selection(sel: dict, out=None) -> None:
 
 
 def _candidates(args, names):
-    """The candidate sets of the command line (the prior is always one besides): ``--candidates``; else for a map
-    :data:`MAP_CANDIDATES` without ``--params``, the subsets of ``--params`` with it; for recordings ``--params``
-    as one set (fitted, or the nominal values kept)."""
+    """The candidate sets of the command line (the prior is always one besides): ``--candidates``; else without
+    ``--params`` :data:`MAP_CANDIDATES` for a map, :data:`BENCH_CANDIDATES` for recordings; with it, for a map the
+    subsets of ``--params``, for recordings ``--params`` as one set (fitted, or the nominal values kept)."""
     if args.candidates is not None:
         return [parse_params(c) for c in args.candidates.split(";") if c.strip()]
-    if args.map:
-        return MAP_CANDIDATES if args.params is None else None
-    return [names]
+    if args.params is None:
+        return MAP_CANDIDATES if args.map else BENCH_CANDIDATES
+    return None if args.map else [names]
 
 
 def cmd_calibrate(args) -> int:
@@ -415,7 +422,9 @@ def cmd_calibrate(args) -> int:
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     from ..twin.settings import oil_sensor_tau_arg
     det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
-                           oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
+                           oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau),
+                           flow_sensor_tau_s=check_range("--flow-sensor-tau", args.flow_sensor_tau, 0.0,
+                                                         FLOW_SENSOR_TAU_MAX_S, unit="s"))
     fit_options = {"config_path": args.config, "params": names, "model": args.model, "holdout": args.holdout,
                    "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say, "cv": cv,
                    "candidates": candidates}
@@ -462,7 +471,8 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
     p.add_argument("--params", default=None,
                    help="comma list of tip, lateral, cd, tip_dh, displacement: fitted (--cv none) or the largest "
-                        "candidate set (default tip,lateral; with --map tip,lateral,displacement,bypass)")
+                        "candidate set (default with --bench: tip,lateral fitted with --cv none, else the default candidates of "
+                        "--candidates; with --map tip,lateral,displacement,bypass)")
     p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,
                    help="choose the parameter set by cross-validation: leave one speed (or point) out; auto: speed "
                         "when there are two speeds or more (default auto); none: fit --params, hold out every "
@@ -472,7 +482,8 @@ def add_parser(sub) -> None:
                    help="candidate sets for --cv, ';'-separated (e.g. 'displacement;tip,lateral,displacement'); "
                         "the prior is always one (default with --map and no --params: the gaps, the displacement, "
                         "the gaps with each of displacement and bypass, and all four; with --map and --params every "
-                        "subset of --params up to 3 parameters, their prefixes beyond; with --bench --params as one set)")
+                        "subset of --params up to 3 parameters, their prefixes beyond; with --bench and no --params: "
+                        "tip,lateral;displacement;tip,lateral,displacement; with --bench --params as one set)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4,
@@ -483,6 +494,10 @@ def add_parser(sub) -> None:
     p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's oil thermometer [s]: each plateau's oil temperature is "
                         "its mean reading + S × the readings' slope (default 0 = as read)")
+    p.add_argument("--flow-sensor-tau", type=float, default=0.0, metavar="S",
+                   help="time constant of the bench's flow meter [s] (first-order lag): each plateau's mean flow "
+                        "with the lag undone, the mean reading + S × (its end − its start) / the plateau's length "
+                        "(default 0 = as read)")
     p.add_argument("--flow-floor", type=float, default=C.MODEL_FLOW_SD_REL, metavar="REL",
                    help="model error of a plateau's mean flow, relative, added in quadrature to its standard "
                         f"error (default {C.MODEL_FLOW_SD_REL:g}; 0: noise only)")

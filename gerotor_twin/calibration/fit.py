@@ -14,6 +14,8 @@ parameters are refitted on all plateaus for the config that is written.
 """
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 import multiprocessing
 import os
@@ -27,7 +29,7 @@ from scipy.optimize import least_squares
 from ..errors import InputError
 from ..twin.health import HealthSettings
 from . import identifiability as ident
-from .fit_model import PARAMETERS, PlateauTask, apply, plateau_flow, prior_values
+from .fit_model import PARAMETERS, PlateauTask, apply, plateau_flow, prior_values, with_edge_losses, without_edge_losses
 from .plateaus import PlateauRecord
 
 __all__ = ["Evaluator", "FitResult", "fit", "split_holdout", "plateau_errors", "MODEL_FLOW_SD_REL"]
@@ -53,6 +55,7 @@ class Evaluator:
         self.progress = progress
         self.simulated = 0
         self._pool = None
+        self._runs: dict[str, dict] = {}
 
     def close(self) -> None:
         if self._pool is not None:
@@ -66,10 +69,35 @@ class Evaluator:
         self.close()
 
     def flows(self, names, xs: list[np.ndarray], records: list[PlateauRecord]) -> np.ndarray:
-        """Model mean delivery flow [m³/s], shape (len(xs), len(records))."""
-        tasks = [PlateauTask(apply(self.raw_prior, names, x), self.table_tip, self.bearing, r.omega,
-                             r.p_suction_pa, r.p_delivery_pa, r.oil_temperature_c)
-                 for x in xs for r in records]
+        """Model mean delivery flow [m³/s], shape (len(xs), len(records)).
+
+        Each (config, plateau) runs once per evaluator: a run is kept and reused by every later call that
+        needs it (the prior and the finite-difference steps of each fold and candidate set), and configs that
+        differ only in their ``volumetric`` section (the effective displacement, the bypass: losses applied
+        after the chamber model) share one run (:func:`.fit_model.with_edge_losses`).  ``simulated`` counts
+        the runs.
+        """
+        wanted = []                          # (run key, config, plateau) per output element
+        todo: dict[str, PlateauTask] = {}
+        for x in xs:
+            raw = apply(self.raw_prior, names, x)
+            sim = without_edge_losses(raw)
+            for r in records:
+                task = PlateauTask(sim, self.table_tip, self.bearing, r.omega, r.p_suction_pa, r.p_delivery_pa,
+                                   r.oil_temperature_c)
+                key = json.dumps(dataclasses.asdict(task), sort_keys=True)
+                wanted.append((key, raw, r))
+                if key not in self._runs:
+                    todo[key] = task
+        self._run(todo)
+        flows = [with_edge_losses(self._runs[key], raw, r.omega) for key, raw, r in wanted]
+        return np.array(flows).reshape(len(xs), len(records))
+
+    def _run(self, todo: dict) -> None:
+        """Run the tasks ``todo`` (key → :class:`.fit_model.PlateauTask`) into the kept runs."""
+        if not todo:
+            return
+        tasks = list(todo.values())
         if self.jobs == 1 or len(tasks) < 2:
             out = [plateau_flow(t) for t in tasks]
         else:
@@ -77,10 +105,10 @@ class Evaluator:
                 plateau_flow(tasks[0])
                 self._pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("fork"))
             out = list(self._pool.map(plateau_flow, tasks, chunksize=max(1, len(tasks) // (4 * self.jobs))))
+        self._runs.update(zip(todo, out))
         self.simulated += len(tasks)
         if self.progress:
             self.progress(f"  {self.simulated} plateau simulations")
-        return np.array([o["flow_m3s"] for o in out]).reshape(len(xs), len(records))
 
 
 @dataclass(frozen=True)

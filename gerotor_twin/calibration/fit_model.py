@@ -37,7 +37,8 @@ from ..errors import InputError
 from ..geometry.tables import cached_tables
 from ..units import celsius_to_kelvin, pa_abs_to_bar_gauge, rad_s_to_rpm
 
-__all__ = ["FitParameter", "PARAMETERS", "parse_params", "apply", "PlateauTask", "plateau_flow"]
+__all__ = ["FitParameter", "PARAMETERS", "parse_params", "apply", "PlateauTask", "plateau_flow", "without_edge_losses",
+           "with_edge_losses"]
 
 
 @dataclass(frozen=True)
@@ -139,8 +140,10 @@ def plateau_flow(task: PlateauTask) -> dict:
     Returns
     -------
     dict
-        ``flow_m3s`` (revolution-mean delivery), ``theoretical_m3s``, ``revolutions``,
-        ``periodicity_error``.
+        ``flow_m3s`` (revolution-mean delivery [m³/s]), ``theoretical_m3s``, ``revolutions``,
+        ``periodicity_error``; and what :func:`with_edge_losses` needs to put another ``volumetric`` section on
+        the same run: ``edge_free_m3s`` (the chamber model's delivery before the edge losses [m³/s]),
+        ``displacement_m3`` [m³/rev], ``density_kg_m3``, ``p_delivery_pa``, ``p_suction_pa`` (as run) [Pa abs].
 
     Notes
     -----
@@ -159,4 +162,29 @@ def plateau_flow(task: PlateauTask) -> dict:
     res = run_steady(model, rad_s_to_rpm(task.omega), pa_abs_to_bar_gauge(task.p_delivery_pa, p_atm),
                      max_revolutions=60, rtol=1e-6, p_suction=ps, oil_temperature=t_oil)
     return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,
-            "revolutions": res.revolutions, "periodicity_error": res.periodicity_error}
+            "revolutions": res.revolutions, "periodicity_error": res.periodicity_error,
+            "edge_free_m3s": float(res.outputs.volumetric_efficiency * res.theoretical_flow_m3s),
+            "displacement_m3": model.displacement, "density_kg_m3": cfg.fluid.density_kg_m3,
+            "p_delivery_pa": float(np.mean(res.outputs.delivery_pressure)),
+            "p_suction_pa": cfg.boundary.suction_pressure_pa if ps is None else ps}     # as run_steady takes them
+
+
+def without_edge_losses(raw: dict) -> dict:
+    """The raw config mapping with its ``volumetric`` section at the ideal pump (k_D = 1, no bypass): the edge
+    losses are applied after the chamber model (:mod:`gerotor_twin.model.volumetric`), so every ``volumetric``
+    section shares one run of it (:func:`with_edge_losses`)."""
+    out = dict(raw)
+    out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0}
+    return out
+
+
+def with_edge_losses(run: dict, raw: dict, omega: float) -> float:
+    """The mean delivery flow [m³/s] of :func:`plateau_flow`'s ``run`` (of any ``volumetric`` section) with the
+    edge losses of the raw config mapping ``raw``'s ``volumetric`` section at speed ``omega`` [rad/s]
+    (:class:`~gerotor_twin.model.volumetric.EdgeLosses`, applied as :func:`~gerotor_twin.model.steady.run_steady`
+    applies them)."""
+    from ..model.volumetric import EdgeLosses
+    vs = raw.get("volumetric", {})
+    edge = EdgeLosses(run["displacement_m3"], float(vs.get("displacement_factor", 1.0)),
+                      float(vs.get("bypass_area_m2", 0.0)), run["density_kg_m3"])
+    return run["edge_free_m3s"] - edge.flow(omega, run["p_delivery_pa"], run["p_suction_pa"])

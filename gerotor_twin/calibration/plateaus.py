@@ -17,7 +17,7 @@ from ..report.analysis import binned, find_plateaus, make_grid
 from ..report.data import load_bench
 from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
 
-__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus", "thermometer_lag_note"]
+__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus", "lag_undone_mean", "thermometer_lag_note"]
 
 #: Oil warming or cooling on a plateau beyond which an unset thermometer lag is worth a note [K/s].
 OIL_DRIFT_NOTE_K_S = 0.05
@@ -30,6 +30,7 @@ class DetectorSettings:
     min_s: float = 1.5           #: shortest plateau kept, after settling [s]
     settle_s: float = 1.0        #: dropped at the start of each plateau (drive, valve, flow meter) [s]
     oil_sensor_tau_s: float = 0.0  #: oil thermometer lag [s]: plateau mean + τ × slope of the readings
+    flow_sensor_tau_s: float = 0.0  #: flow meter lag [s]: each plateau's mean flow with it undone (:func:`lag_undone_mean`)
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,37 @@ def mean_standard_error(v: np.ndarray, dt: float, batch_s: float = 0.5) -> float
     return sem
 
 
+def lag_undone_mean(v: np.ndarray, dt: float, tau: float) -> tuple[float, float]:
+    r"""Mean over a plateau of a quantity read through a first-order lag of time constant ``tau`` [s], from the
+    readings' bin means ``v`` (consecutive bins of ``dt`` [s]); and that mean's standard error [units of v].
+
+    A sensor with :math:`\tau \dot y = u - y` reads y for the quantity u, so over the window [a, b] the bins span
+
+    .. math::
+        \bar u = \bar y + \tau\,\frac{y(b) - y(a)}{b - a}
+
+    exactly, whatever u did (a step the sensor has not followed yet, a ramp it lags by τ·u̇); y(a), y(b) are the
+    readings at the window's edges, extrapolated linearly from the two outer bins
+    (:math:`y(a) \approx \tfrac32 v_0 - \tfrac12 v_1`).  The standard error adds the edges' noise to the plain
+    mean's (:func:`mean_standard_error`): :math:`(\tau/(b-a))^2 \cdot 5\sigma^2`, σ² the bins' noise variance
+    from their first differences (var Δv / 2, insensitive to the slow settling itself).  ``tau`` = 0: the plain
+    mean.  Notes: exact for a first-order lag; a sensor that is not one (a dead time, a second-order
+    response) leaves a residual the plateau's settling (``settle_s``) must still cover.
+    """
+    v = np.asarray(v, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return math.nan, math.nan
+    mean, sem = float(v.mean()), mean_standard_error(v, dt)
+    if not tau > 0 or v.size < 3:
+        return mean, sem
+    span = v.size * dt
+    ya = 1.5 * v[0] - 0.5 * v[1]
+    yb = 1.5 * v[-1] - 0.5 * v[-2]
+    noise_var = float(np.var(np.diff(v), ddof=1)) / 2.0
+    return mean + tau * (yb - ya) / span, math.sqrt(sem ** 2 + (tau / span) ** 2 * 5.0 * noise_var)
+
+
 def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
     if series is None or len(series[0]) == 0:
         return math.nan
@@ -121,13 +153,13 @@ def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> lis
     for p in plateaus:
         q = grid.q_meas[p.i0:p.i1]
         q = q[np.isfinite(q)]
-        sem = mean_standard_error(q, dt)
+        flow, sem = lag_undone_mean(q, dt, settings.flow_sensor_tau_s)
         oil, slope = _oil_on(bench.temperature, edges[p.i0], edges[p.i1], settings.oil_sensor_tau_s)
         out.append(PlateauRecord(
             bag=str(path), index=p.index, t0_s=p.t0, t1_s=p.t1,
             omega=float(np.mean(grid.omega[p.i0:p.i1])), p_delivery_pa=float(np.mean(grid.p_delivery[p.i0:p.i1])),
             p_suction_pa=_mean_on(bench.suction_pressure, edges, p.i0, p.i1),
-            oil_temperature_c=oil, flow_m3s=float(q.mean()), flow_sem_m3s=sem, bins=int(q.size),
+            oil_temperature_c=oil, flow_m3s=flow, flow_sem_m3s=sem, bins=int(q.size),
             oil_slope_k_s=slope))
     return out
 

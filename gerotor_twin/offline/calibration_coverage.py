@@ -9,16 +9,17 @@ For each shipped bench pump (``config/bench_pumps/*.yaml``) and seed:
    emulated pump in periodic steady state, read through its sensors' biases and noise) at :data:`TRAIN_RPM` ×
    :data:`TRAIN_BAR`, the oil warming from 35 to 60 °C over the plateaus (:func:`train_points`) — the
    operating points of a map recording;
-2. **calibration** as ``gerotor-twin calibrate --bench`` does it (``--params``, default tip and lateral, fitted
-   or the nominal values kept, chosen by leave-one-speed-out cross-validation: the nominal values are kept
-   when the fit does not predict the held-out speeds better), with its 95 % prediction interval
-   (:mod:`gerotor_twin.calibration.prediction`);
+2. **calibration** as ``gerotor-twin calibrate --bench`` does it (its candidate sets,
+   :data:`~gerotor_twin.calibration.command.BENCH_CANDIDATES`, or one set with ``--params``; chosen by
+   leave-one-speed-out cross-validation, the nominal values kept when no set predicts the held-out speeds
+   better), with its 95 % prediction interval (:mod:`gerotor_twin.calibration.prediction`);
 3. **held-out plateaus**, never seen by the calibration: ``--held-out`` operating points drawn with the seed
    uniformly over 800–2950 rpm, 3–27 bar, 40–60 °C oil, with their own noise draws; on each the error of the
    nominal twin and of the calibrated twin, and whether the calibrated twin's 95 % interval holds its error.
 
 ``--bags DIR`` does the same on recordings (:func:`evaluate_bags`: the ``map`` profile's recording fitted by
-``calibrate --bench``, the ``transient`` profile's plateaus held out; minutes per pump).
+``calibrate --bench`` with the bench pump's thermometer and flow-meter lags undone, the ``transient`` profile's
+plateaus held out the same way; minutes per pump).
 
 Prints one row per pump and seed and the pooled coverage (docs/calibration_health.md, "Calibration on
 bench pumps that differ in form").  Seeds are fixed; nothing is asserted here (the tests,
@@ -40,7 +41,7 @@ from ..bench_emulator.bench_pump import load_bench_pump
 from ..calibration import fit as C
 from ..calibration import prediction as P
 from ..calibration.bench_steady import SteadyBench, steady_plateaus
-from ..calibration.command import calibrate_records
+from ..calibration.command import BENCH_CANDIDATES, calibrate_records
 from ..calibration.fit_model import parse_params
 from ..config import load_config
 from ..errors import InputError, check_range
@@ -83,8 +84,8 @@ class Case:
     pump: Path
     seed: int
     held_out: int = 6
-    params: tuple = ("tip", "lateral")
-    candidates: tuple | None = None      #: None: ``params`` as one set (``calibrate --bench``'s default)
+    params: tuple = ("tip", "lateral")   #: the largest candidate set
+    candidates: tuple | None = BENCH_CANDIDATES   #: None: ``params`` as one set (``calibrate --bench --params``)
 
 
 def evaluate(case: Case, jobs: int | None = None) -> dict:
@@ -98,7 +99,7 @@ def evaluate(case: Case, jobs: int | None = None) -> dict:
     held = steady_plateaus(bench, held_out_points(case.seed, case.held_out, p_atm), seed=case.seed + 10_000,
                            source=f"{name}-held-out")
     res = calibrate_records(train, [f"{name}-map"], params=case.params, cv="speed", jobs=jobs,
-                            candidates=case.candidates or (case.params,))
+                            candidates=case.candidates if case.candidates is not None else (case.params,))
     return {"seed": case.seed, **judge(res, held, name, jobs)}
 
 
@@ -147,9 +148,9 @@ def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None) -> 
         if not bags[profile].exists():
             from dataclasses import replace
             synthesize(get_profile(profile), bags[profile], replace(spec, seed=seed + k), bench_pump=bp, progress=None)
-    det = DetectorSettings(oil_sensor_tau_s=spec.temperature_tau_s)
+    det = DetectorSettings(oil_sensor_tau_s=spec.temperature_tau_s, flow_sensor_tau_s=spec.flow_tau_s)
     res = calibrate_bags([bags["map"]], detector=det, params=("tip", "lateral"), cv="auto",
-                         candidates=[("tip", "lateral")], jobs=jobs)
+                         candidates=BENCH_CANDIDATES, jobs=jobs)
     held = bench_plateaus(bags["transient"], det)
     return {"seed": seed, "bags": {k: str(v) for k, v in bags.items()}, **judge(res, held, bp.name, jobs)}
 
@@ -187,7 +188,9 @@ def main(argv=None) -> int:
     p.add_argument("--pumps", default=None, help="bench pump names, comma-separated (default: every shipped one)")
     p.add_argument("--seeds", default="1,2,3", help="seeds, comma-separated (default 1,2,3)")
     p.add_argument("--held-out", type=int, default=6, help="held-out plateaus per pump and seed (default 6)")
-    p.add_argument("--params", default="tip,lateral", help="largest candidate set (default tip,lateral)")
+    p.add_argument("--params", default=None,
+                   help="one parameter set to fit or keep nominal, as `calibrate --bench --params` (default: "
+                        "calibrate --bench's candidate sets, " + "; ".join(",".join(c) for c in BENCH_CANDIDATES) + ")")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--json", default=None, help="write every row (per plateau too) to this file")
     p.add_argument("--bags", default=None, metavar="DIR",
@@ -204,13 +207,14 @@ def main(argv=None) -> int:
         if not seeds:
             raise InputError("--seeds", args.seeds, "comma-separated integers")
         check_range("--held-out", args.held_out, 1, 1000)
-        params = parse_params(args.params)
+        params = None if args.params is None else parse_params(args.params)
     except ValueError:
         p.error(f"--seeds = {args.seeds!r} is invalid; allowed: comma-separated integers")
     except InputError as e:
         p.error(str(e))
     t0 = time.perf_counter()
-    cases = [Case(files[n], s, args.held_out, params) for n in names for s in seeds]
+    cases = [Case(files[n], s, args.held_out) if params is None else Case(files[n], s, args.held_out, params, None)
+             for n in names for s in seeds]
     result = run(cases, args.jobs, bags_dir=None if args.bags is None else Path(args.bags))
     print(f"{len(cases)} cases in {time.perf_counter() - t0:.0f} s")
     if args.json:
