@@ -84,6 +84,25 @@ def test_steady_bench_readings_closed_form():
     assert r.p_suction_pa == pytest.approx(101325.0 - 5000.0 * (1500 / 3000) ** 2)
 
 
+def test_coverage_points_scale_to_the_pump_range_closed_form():
+    """Closed form: the coverage run's training map and held-out draws are the default pump's operating points
+    (1000 / 1900 / 2800 rpm × 5 / 14 / 24 bar) on its own range, and on a pump of the family the same points scaled
+    by its top speed / 3000 rpm and top pressure / 27.5 bar (04: 7000 rpm, 6 bar), the same draws per seed."""
+    nominal = load_config()
+    small = load_config("config/pumps/04_motorcycle_engine_oil.yaml")
+    p_atm = nominal.fluid.atmospheric_pa
+    pts = cov.train_points(nominal)
+    assert [round(w * 30 / math.pi, 9) for w, _, _ in pts[:4]] == [1000, 1000, 1000, 1900]
+    assert [round((p - p_atm) / 1e5, 9) for _, p, _ in pts[:4]] == [5, 14, 24, 24]
+    scaled = cov.train_points(small)
+    for (w, p, t), (w2, p2, t2) in zip(pts, scaled):
+        assert w2 == pytest.approx(w * 7000 / 3000) and t2 == t
+        assert p2 - small.fluid.atmospheric_pa == pytest.approx((p - p_atm) * 6 / 27.5)
+    held, held2 = cov.held_out_points(4, 5, nominal), cov.held_out_points(4, 5, small)
+    assert all(800 <= w * 30 / math.pi <= 2950 for w, _, _ in held)
+    assert [w2 for w2, _, _ in held2] == pytest.approx([w * 7000 / 3000 for w, _, _ in held])
+
+
 def test_calibrate_refuses_when_fitting_makes_held_out_worse(tmp_path, capsys):
     """Behaviour (known truth): a steady map at 50 °C of the bench pump with 0.8 % free air and a lower port Cd
     (``aerated_oil_sensor_lag``; its clearances are nominal) read as ``calibrate --map``.  The clearances fitted

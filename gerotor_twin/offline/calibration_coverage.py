@@ -1,7 +1,7 @@
 """Calibration on pumps that differ from the twin in form: held-out errors and interval coverage (a measurement).
 
 ``python -m gerotor_twin.offline.calibration_coverage [--pumps a,b] [--seeds 1,2,3] [--held-out 6] [--jobs 2]
-[--json F]``
+[--config F] [--bags DIR] [--json F]``
 
 For each shipped bench pump (``config/bench_pumps/*.yaml``) and seed:
 
@@ -16,6 +16,10 @@ For each shipped bench pump (``config/bench_pumps/*.yaml``) and seed:
 3. **held-out plateaus**, never seen by the calibration: ``--held-out`` operating points drawn with the seed
    uniformly over 800–2950 rpm, 3–27 bar, 40–60 °C oil, with their own noise draws; on each the error of the
    nominal twin and of the calibrated twin, and whether the calibrated twin's 95 % interval holds its error.
+
+``--config F`` takes another nominal pump (a pump of the family, ``config/pumps/``): the bench pumps' deviations
+apply to it and the operating points are scaled to its range (``range.max_speed_rpm`` / 3000 rpm,
+``range.max_delivery_bar`` / 27.5 bar).
 
 ``--bags DIR`` does the same on recordings (:func:`evaluate_bags`: the ``map`` profile's recording fitted by
 ``calibrate --bench`` with the bench pump's thermometer and flow-meter lags undone, the ``transient`` profile's
@@ -50,6 +54,9 @@ from ..resources import resource_path
 __all__ = ["TRAIN_RPM", "TRAIN_BAR", "shipped_pumps", "train_points", "held_out_points", "evaluate", "evaluate_bags",
            "judge", "run", "main"]
 
+#: The operating points below are the default pump's (its range 3000 rpm, 27.5 bar); another pump's
+#: (``--config``) are scaled by its ``range.max_speed_rpm`` / 3000 and ``range.max_delivery_bar`` / 27.5.
+RANGE_RPM, RANGE_BAR = 3000.0, 27.5
 TRAIN_RPM = (1000.0, 1900.0, 2800.0)     #: speeds of the training map [rpm]
 TRAIN_BAR = (5.0, 14.0, 24.0)            #: delivery pressures of the training map, gauge [bar]
 TRAIN_OIL_C = (35.0, 60.0)               #: oil temperature at the first and the last plateau of the map [°C]
@@ -63,19 +70,30 @@ def shipped_pumps() -> list[Path]:
     return sorted(resource_path("config", "bench_pumps").glob("*.yaml"))
 
 
-def train_points(p_atm: float) -> list[tuple[float, float, float]]:
-    """The training map in the order a recording runs it (pressures up at one speed, down at the next) with the
-    oil warming linearly from the first plateau to the last: (speed [rad/s], delivery [Pa abs], oil [°C])."""
+def _scales(cfg) -> tuple[float, float]:
+    """Speed and pressure scale of the pump ``cfg`` against the default pump's range [-] (module constants)."""
+    return cfg.range.max_speed_rpm / RANGE_RPM, cfg.range.max_delivery_bar / RANGE_BAR
+
+
+def train_points(cfg) -> list[tuple[float, float, float]]:
+    """The training map of the pump ``cfg`` (:data:`TRAIN_RPM` × :data:`TRAIN_BAR` scaled to its range) in the order
+    a recording runs it (pressures up at one speed, down at the next) with the oil warming linearly from the first
+    plateau to the last: (speed [rad/s], delivery [Pa abs], oil [°C])."""
+    sn, sp = _scales(cfg)
+    p_atm = cfg.fluid.atmospheric_pa
     order = [(rpm, bar) for k, rpm in enumerate(TRAIN_RPM) for bar in (TRAIN_BAR if k % 2 == 0 else TRAIN_BAR[::-1])]
     oil = np.linspace(*TRAIN_OIL_C, len(order))
-    return [(rpm * math.pi / 30, p_atm + bar * 1e5, float(t)) for (rpm, bar), t in zip(order, oil)]
+    return [(sn * rpm * math.pi / 30, p_atm + sp * bar * 1e5, float(t)) for (rpm, bar), t in zip(order, oil)]
 
 
-def held_out_points(seed: int, n: int, p_atm: float) -> list[tuple[float, float, float]]:
-    """``n`` operating points drawn with ``seed``: (speed [rad/s], delivery [Pa abs], oil [°C])."""
+def held_out_points(seed: int, n: int, cfg) -> list[tuple[float, float, float]]:
+    """``n`` operating points of the pump ``cfg`` drawn with ``seed`` (:data:`HELD_RPM`, :data:`HELD_BAR` scaled to
+    its range): (speed [rad/s], delivery [Pa abs], oil [°C])."""
+    sn, sp = _scales(cfg)
+    p_atm = cfg.fluid.atmospheric_pa
     rng = np.random.default_rng([seed, 28])
-    return [(rng.uniform(*HELD_RPM) * math.pi / 30, p_atm + rng.uniform(*HELD_BAR) * 1e5, rng.uniform(*HELD_OIL_C))
-            for _ in range(n)]
+    return [(sn * rng.uniform(*HELD_RPM) * math.pi / 30, p_atm + sp * rng.uniform(*HELD_BAR) * 1e5,
+             rng.uniform(*HELD_OIL_C)) for _ in range(n)]
 
 
 @dataclass(frozen=True)
@@ -86,27 +104,28 @@ class Case:
     held_out: int = 6
     params: tuple = ("tip", "lateral")   #: the largest candidate set
     candidates: tuple | None = BENCH_CANDIDATES   #: None: ``params`` as one set (``calibrate --bench --params``)
+    config: Path | None = None           #: the nominal pump the bench pump derives from (None: config/pump.yaml)
 
 
 def evaluate(case: Case, jobs: int | None = None) -> dict:
     """Calibrate on the training map of ``case`` and judge it on its held-out plateaus (module doc)."""
-    cfg = load_config()
-    bench = SteadyBench.of(load_bench_pump(case.pump))
-    p_atm = cfg.fluid.atmospheric_pa
-    train_pts = train_points(p_atm)
+    cfg = load_config(case.config)
+    bench = SteadyBench.of(load_bench_pump(case.pump), config_path=case.config)
     name = bench.bench_pump.name
-    train = steady_plateaus(bench, train_pts, seed=case.seed, source=f"{name}-map")
-    held = steady_plateaus(bench, held_out_points(case.seed, case.held_out, p_atm), seed=case.seed + 10_000,
+    train = steady_plateaus(bench, train_points(cfg), seed=case.seed, source=f"{name}-map")
+    held = steady_plateaus(bench, held_out_points(case.seed, case.held_out, cfg), seed=case.seed + 10_000,
                            source=f"{name}-held-out")
-    res = calibrate_records(train, [f"{name}-map"], params=case.params, cv="speed", jobs=jobs,
-                            candidates=case.candidates if case.candidates is not None else (case.params,))
-    return {"seed": case.seed, **judge(res, held, name, jobs)}
+    res = calibrate_records(train, [f"{name}-map"], config_path=case.config, params=case.params, cv="speed",
+                            jobs=jobs, candidates=case.candidates if case.candidates is not None else (case.params,))
+    return {"seed": case.seed, "config": str(case.config or "config/pump.yaml"),
+            **judge(res, held, name, jobs, case.config)}
 
 
-def judge(res: dict, held: list, name: str, jobs: int | None = None) -> dict:
+def judge(res: dict, held: list, name: str, jobs: int | None = None, config_path=None) -> dict:
     """The calibration result ``res`` (:func:`~gerotor_twin.calibration.command.calibrate_records`, cross-validated)
-    on the held-out plateaus ``held``: nominal and calibrated errors, the interval's coverage."""
-    cfg = load_config()
+    on the held-out plateaus ``held`` of the pump ``config_path`` (None: the default): nominal and calibrated
+    errors, the interval's coverage."""
+    cfg = load_config(config_path)
     sel = res["selection"]
     chosen = next(c for c in sel["candidates"] if c["params"] == sel["chosen"])
     form = P.ModelFormError(chosen["model_form_sd_eta"], len(chosen["cv_errors"]))
@@ -131,28 +150,33 @@ def judge(res: dict, held: list, name: str, jobs: int | None = None) -> dict:
             "plateaus": fitted, "plateaus_nominal": nominal, "simulations": res["simulations"]}
 
 
-def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None) -> dict:
+def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None, config: Path | None = None) -> dict:
     """The same on recordings (minutes per pump): ``synth-bench --bench-pump`` makes the ``map`` profile's
     recording (seed ``seed``) and the ``transient`` profile's (seed ``seed`` + 1); ``calibrate --bench`` fits the
-    map recording (its default candidates; the bench pump's thermometer lag undone, ``--oil-sensor-tau``), and
-    the transient recording's plateaus are held out."""
+    map recording (its default candidates; the bench pump's thermometer and flow-meter lags undone,
+    ``--oil-sensor-tau``, ``--flow-sensor-tau``), and the transient recording's plateaus are held out.  ``config``:
+    the nominal pump the bench pump derives from (the profiles scaled to its range)."""
     from ..bench_emulator import BenchSpec, get_profile, synthesize
     from ..calibration.command import calibrate_bags
     from ..calibration.plateaus import DetectorSettings, bench_plateaus
+    from dataclasses import replace
     bp = load_bench_pump(pump)
     spec = bp.bench_spec(BenchSpec(seed=seed))
+    cfg = load_config(config)
+    prefix = "" if config is None else f"{Path(config).stem}_"
     out.mkdir(parents=True, exist_ok=True)
     bags = {}
     for k, profile in enumerate(("map", "transient")):
-        bags[profile] = out / f"{bp.name}_{profile}_{seed + k}.mcap"
+        bags[profile] = out / f"{prefix}{bp.name}_{profile}_{seed + k}.mcap"
         if not bags[profile].exists():
-            from dataclasses import replace
-            synthesize(get_profile(profile), bags[profile], replace(spec, seed=seed + k), bench_pump=bp, progress=None)
+            synthesize(get_profile(profile, cfg.range), bags[profile], replace(spec, seed=seed + k),
+                       config=None if config is None else cfg, bench_pump=bp, progress=None)
     det = DetectorSettings(oil_sensor_tau_s=spec.temperature_tau_s, flow_sensor_tau_s=spec.flow_tau_s)
-    res = calibrate_bags([bags["map"]], detector=det, params=("tip", "lateral"), cv="auto",
+    res = calibrate_bags([bags["map"]], detector=det, config_path=config, params=("tip", "lateral"), cv="auto",
                          candidates=BENCH_CANDIDATES, jobs=jobs)
     held = bench_plateaus(bags["transient"], det)
-    return {"seed": seed, "bags": {k: str(v) for k, v in bags.items()}, **judge(res, held, bp.name, jobs)}
+    return {"seed": seed, "config": str(config or "config/pump.yaml"), "bags": {k: str(v) for k, v in bags.items()},
+            **judge(res, held, bp.name, jobs, config)}
 
 
 def _pt(v: float) -> str:
@@ -169,10 +193,12 @@ def run(cases: list[Case], jobs: int | None = None, out=None, bags_dir: Path | N
     rows = []
     for case in cases:
         t0 = time.perf_counter()
-        r = evaluate(case, jobs) if bags_dir is None else evaluate_bags(case.pump, case.seed, bags_dir, jobs)
+        r = evaluate(case, jobs) if bags_dir is None else evaluate_bags(case.pump, case.seed, bags_dir, jobs,
+                                                                        case.config)
         r["wall_s"] = time.perf_counter() - t0
         rows.append(r)
-        print(f"| `{r['pump']}` | {r['seed']} | {'+'.join(r['chosen']) or 'none (nominal kept)'} | "
+        on = "" if case.config is None else f" on {Path(case.config).stem}"
+        print(f"| `{r['pump']}`{on} | {r['seed']} | {'+'.join(r['chosen']) or 'none (nominal kept)'} | "
               f"{_pt(r['nominal_mean_abs'])} ({_pt(r['nominal_max_abs'])}) → {_pt(r['fitted_mean_abs'])} "
               f"({_pt(r['fitted_max_abs'])}) | ± {_pt(r['half_width_rms'])} | {r['covered']}/{r['held_out']} |",
               file=out, flush=True)
@@ -191,6 +217,9 @@ def main(argv=None) -> int:
     p.add_argument("--params", default=None,
                    help="one parameter set to fit or keep nominal, as `calibrate --bench --params` (default: "
                         "calibrate --bench's candidate sets, " + "; ".join(",".join(c) for c in BENCH_CANDIDATES) + ")")
+    p.add_argument("--config", default=None, metavar="F",
+                   help="the nominal pump the bench pumps derive from (default config/pump.yaml); the operating "
+                        "points are scaled to its range")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--json", default=None, help="write every row (per plateau too) to this file")
     p.add_argument("--bags", default=None, metavar="DIR",
@@ -213,8 +242,15 @@ def main(argv=None) -> int:
     except InputError as e:
         p.error(str(e))
     t0 = time.perf_counter()
-    cases = [Case(files[n], s, args.held_out) if params is None else Case(files[n], s, args.held_out, params, None)
-             for n in names for s in seeds]
+    config = None
+    if args.config is not None:
+        try:
+            load_config(args.config)
+            config = Path(args.config)
+        except InputError as e:
+            p.error(str(e))
+    cases = [Case(files[n], s, args.held_out, config=config) if params is None else
+             Case(files[n], s, args.held_out, params, None, config) for n in names for s in seeds]
     result = run(cases, args.jobs, bags_dir=None if args.bags is None else Path(args.bags))
     print(f"{len(cases)} cases in {time.perf_counter() - t0:.0f} s")
     if args.json:
