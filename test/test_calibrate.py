@@ -198,22 +198,23 @@ def _lagged_bins(u, tau, dt, t_end, sub=200):
 
 def test_lag_undone_mean_closed_form():
     """Closed form: a flow meter with a first-order lag (τ = 0.5 s) reads a step from 10 to 20 at t = 0 s; on the
-    plateau window 1–3 s (bins of 0.1 s) the reading is still e⁻² of the step behind at its start, and the plain
-    mean is 10·τ/T·(e⁻² − e⁻⁶) = 0.33 low; the mean with the lag undone, ȳ + τ(y(b) − y(a))/(b − a), is exact but
-    for the edge reading's linear extrapolation from two bin means, whose error for a curvature y'' is
-    y''·dt²/3 (the bins' means of a parabola), so |ū − 20| ≤ τ/T·10e⁻²/τ²·dt²/3 = 0.0045 (measured 0.0038).
-    A ramp u = 10 + 2t read through the lag at its steady lag (y = u − 2τ): the plain mean is 2τ = 1 low, the lag
-    undone exact.  τ = 0: the plain mean and its standard error; τ > 0 adds the edges' noise to it."""
+    plateau window 1–3 s (20 bins of 0.1 s) the reading is still e⁻² of the step behind at its start, and the
+    plain mean is 10·τ/T·(e⁻² − e⁻⁶) = 0.33 low.  With the lag undone (trapezoid weights w, ∫w·u = ∫(w − τẇ)·y)
+    the estimate is exact but for the midpoint rule on the rising taper (L = 0.5 s, 5 bins), whose error is
+    dt²/(12 L) · Δy over that taper / ∫w = 0.01/6 · 10(e⁻² − e⁻³) / 1.5 = 0.00095 (measured 0.0009).  A ramp
+    u = 10 + 2t read at its steady lag (y = u − 2τ): the plain mean is 2τ = 1 low, the lag undone exact (the
+    taper's Σẇ·y is −2(n − m) and Σw = n − m).  τ = 0: the plain mean and its standard error; τ > 0: that standard
+    error × √(n Σc²), here > 1."""
     from gerotor_twin.calibration.plateaus import lag_undone_mean, mean_standard_error
     tau, dt = 0.5, 0.1
-    step = _lagged_bins(lambda t: 20.0, tau, dt, 3.0)
     step_from_10 = _lagged_bins(lambda t: 10.0 if t <= 0 else 20.0, tau, dt, 3.0)
+    assert _lagged_bins(lambda t: 20.0, tau, dt, 3.0) == pytest.approx(20.0)
     v = step_from_10[10:]                                        # the window 1–3 s
     plain, _ = lag_undone_mean(v, dt, 0.0)
     undone, sem = lag_undone_mean(v, dt, tau)
-    assert step[0] == pytest.approx(20.0)
     assert 20.0 - plain == pytest.approx(10 * tau / 2.0 * (np.exp(-2) - np.exp(-6)), rel=0.01)
-    assert abs(undone - 20.0) <= tau / 2.0 * 10 * np.exp(-2) / tau ** 2 * dt ** 2 / 3
+    midpoint = dt ** 2 / (12 * 0.5) * 10 * (np.exp(-2) - np.exp(-3)) / 1.5
+    assert abs(undone - 20.0) <= 1.2 * midpoint                  # the leading-order error, 20 % margin
     assert sem > mean_standard_error(v, dt) >= 0.0
     ramp = 10.0 + 2.0 * (np.arange(30) + 0.5) * dt - 2.0 * tau  # the lagged ramp's bin means, closed form
     plain, _ = lag_undone_mean(ramp[10:], dt, 0.0)
@@ -224,7 +225,10 @@ def test_lag_undone_mean_closed_form():
     m0, s0 = lag_undone_mean(noisy, dt, 0.0)
     m1, s1 = lag_undone_mean(noisy, dt, tau)
     assert (m0, s0) == (float(noisy.mean()), mean_standard_error(noisy, dt))
-    assert s1 == pytest.approx(np.hypot(s0, tau / 2.0 * np.sqrt(5.0 * np.var(np.diff(noisy), ddof=1) / 2)))
+    m, k = 5, np.arange(20) + 0.5
+    w = np.minimum(1.0, np.minimum(k, 20 - k) / m)
+    c = (w - tau * np.where(k < m, 1, np.where(k > 20 - m, -1, 0)) / (m * dt)) / w.sum()
+    assert (m1, s1) == (pytest.approx(float(c @ noisy)), pytest.approx(s0 * np.sqrt(20 * c @ c)))
 
 
 def test_evaluator_shares_runs_across_sets_and_edge_losses(bags):

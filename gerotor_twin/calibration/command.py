@@ -496,8 +496,8 @@ def add_parser(sub) -> None:
                         "its mean reading + S × the readings' slope (default 0 = as read)")
     p.add_argument("--flow-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's flow meter [s] (first-order lag): each plateau's mean flow "
-                        "with the lag undone, the mean reading + S × (its end − its start) / the plateau's length "
-                        "(default 0 = as read)")
+                        "with the lag undone, a trapezoid-weighted mean of reading − S × its weight's slope, exact "
+                        "for such a lag (default 0 = as read)")
     p.add_argument("--flow-floor", type=float, default=C.MODEL_FLOW_SD_REL, metavar="REL",
                    help="model error of a plateau's mean flow, relative, added in quadrature to its standard "
                         f"error (default {C.MODEL_FLOW_SD_REL:g}; 0: noise only)")

@@ -87,31 +87,41 @@ def lag_undone_mean(v: np.ndarray, dt: float, tau: float) -> tuple[float, float]
     r"""Mean over a plateau of a quantity read through a first-order lag of time constant ``tau`` [s], from the
     readings' bin means ``v`` (consecutive bins of ``dt`` [s]); and that mean's standard error [units of v].
 
-    A sensor with :math:`\tau \dot y = u - y` reads y for the quantity u, so over the window [a, b] the bins span
+    A sensor with :math:`\tau \dot y = u - y` reads y for the quantity u.  For a weight w(t) on the plateau
+    [a, b] that vanishes at both ends, integrating by parts,
 
     .. math::
-        \bar u = \bar y + \tau\,\frac{y(b) - y(a)}{b - a}
+        \int_a^b w\,u\,dt = \int_a^b \left(w - \tau \dot w\right) y\,dt
 
-    exactly, whatever u did (a step the sensor has not followed yet, a ramp it lags by τ·u̇); y(a), y(b) are the
-    readings at the window's edges, extrapolated linearly from the two outer bins
-    (:math:`y(a) \approx \tfrac32 v_0 - \tfrac12 v_1`).  The standard error adds the edges' noise to the plain
-    mean's (:func:`mean_standard_error`): :math:`(\tau/(b-a))^2 \cdot 5\sigma^2`, σ² the bins' noise variance
-    from their first differences (var Δv / 2, insensitive to the slow settling itself).  ``tau`` = 0: the plain
-    mean.  Notes: exact for a first-order lag; a sensor that is not one (a dead time, a second-order
-    response) leaves a residual the plateau's settling (``settle_s``) must still cover.
+    exactly, whatever u did (a step the sensor has not followed yet, a ramp it lags by τ·u̇), and without the
+    readings at the edges, which are single noisy samples.  w is a trapezoid: rising over the first quarter
+    of the plateau, flat, falling over the last quarter (symmetric, so the weighted mean of a steady quantity
+    or of a linear drift is its plain mean); the estimate is :math:`\sum_k c_k v_k` with
+    :math:`c_k = (w_k - \tau \dot w_k)/\sum_k w_k` on the bin centres.  Its standard error is the plain
+    mean's (:func:`mean_standard_error`) × :math:`\sqrt{n \sum_k c_k^2}`, the ratio of the two estimators'
+    variances for uncorrelated bins.  ``tau`` = 0: the plain mean.
+
+    Notes
+    -----
+    Exact for a first-order lag up to the bins' midpoint rule (O(dt²)); a sensor that is not one (a dead
+    time, a second-order response) leaves a residual that the plateau's settling (``settle_s``) must still
+    cover.  The derivative weight τ·ẇ grows as the plateau shortens: with τ comparable to the plateau, the
+    estimate is unbiased but noisy, and its standard error says so.
     """
     v = np.asarray(v, dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return math.nan, math.nan
     mean, sem = float(v.mean()), mean_standard_error(v, dt)
-    if not tau > 0 or v.size < 3:
+    n = v.size
+    if not tau > 0 or n < 3:
         return mean, sem
-    span = v.size * dt
-    ya = 1.5 * v[0] - 0.5 * v[1]
-    yb = 1.5 * v[-1] - 0.5 * v[-2]
-    noise_var = float(np.var(np.diff(v), ddof=1)) / 2.0
-    return mean + tau * (yb - ya) / span, math.sqrt(sem ** 2 + (tau / span) ** 2 * 5.0 * noise_var)
+    m = max(1, n // 4)                                   # bins in each taper
+    k = np.arange(n) + 0.5
+    w = np.minimum(1.0, np.minimum(k, n - k) / m)
+    dw = np.where(k < m, 1.0, np.where(k > n - m, -1.0, 0.0)) / (m * dt)
+    c = (w - tau * dw) / w.sum()
+    return float(c @ v), sem * math.sqrt(n * float(c @ c))
 
 
 def _mean_on(series, edges: np.ndarray, a: int, b: int) -> float:
