@@ -168,6 +168,20 @@ def test_written_config_loads_and_reproduces(fits, tmp_path):
     assert prov["residuals"]["eta_max_abs"] < 0.005 and "date" in prov
 
 
+def test_air_parameter_sets_the_free_air_closed_form():
+    """Closed form: ``--params air`` fits the mixture's free air at atmospheric pressure as a log-factor: x = ln 8
+    puts 8 × the prior (0.1 % → 0.8 %, the aerated bench pump's) in ``mixture.air_fraction``; its bounds clip."""
+    import math
+
+    from gerotor_twin.calibration.fit_model import apply
+    raw = load_config().to_dict()
+    assert parse_params("tip,air") == ("tip", "air")
+    out = apply(raw, ("air",), [math.log(8.0)])
+    assert out["mixture"]["air_fraction"] == pytest.approx(8.0 * raw["mixture"]["air_fraction"])
+    assert apply(raw, ("air",), [20.0])["mixture"]["air_fraction"] == 0.2
+    assert raw["mixture"]["air_fraction"] == 1e-3                      # the prior untouched
+
+
 def test_thermometer_lag_note():
     """Behaviour: a note names the fastest oil drift on the plateaus and the reading lag it makes (closed
     form τ × slope) when no lag is set; nothing when the oil is steady, the slope unknown or a lag set."""

@@ -470,7 +470,7 @@ def add_parser(sub) -> None:
                           "the header (example: config/maps/example_map.csv)")
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
     p.add_argument("--params", default=None,
-                   help="comma list of tip, lateral, cd, tip_dh, displacement: fitted (--cv none) or the largest "
+                   help="comma list of tip, lateral, cd, tip_dh, air, displacement, bypass: fitted (--cv none) or the largest "
                         "candidate set (default with --bench: tip,lateral fitted with --cv none, else the default candidates of "
                         "--candidates; with --map tip,lateral,displacement,bypass)")
     p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,

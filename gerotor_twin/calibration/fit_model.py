@@ -14,6 +14,8 @@ tip        clearances.tooth_tip_m        tooth-tip leakage (≈ δ³ Poiseuille 
 lateral    clearances.lateral_m          lateral, suction–delivery and drain leakage (≈ s³)
 cd         orifice.cd_max                port orifices (filling at high speed)
 tip_dh     leakage.tip_dh                equivalent length of the tooth-tip gap
+air        mixture.air_fraction          free air at atmospheric pressure: the chambers'
+                                         compression and the filling at low pressure
 displace-  volumetric.displacement_      effective displacement k_D: a flow deficit
 ment       factor                        (1 − k_D)·D·n at every pressure and speed
 bypass     volumetric.bypass_area_m2     a turbulent delivery → suction path, ∝ √Δp
@@ -69,6 +71,8 @@ PARAMETERS = {p.name: p for p in (
     FitParameter("lateral", "clearances", "lateral_m", 1e-6, 4.9e-4, "m", "lateral clearance per face"),
     FitParameter("cd", "orifice", "cd_max", 0.1, 1.0, "-", "turbulent discharge coefficient of the ports"),
     FitParameter("tip_dh", "leakage", "tip_dh", 0.01, 10.0, "-", "dh of the tooth-tip gap's equivalent length"),
+    FitParameter("air", "mixture", "air_fraction", 1e-6, 0.2, "-",
+                 "free (undissolved) air at atmospheric pressure (fluid_model: mixture)"),
     FitParameter("displacement", "volumetric", "displacement_factor", 0.5, 1.1, "-",
                  "effective displacement / ideal profiles' (filling, tolerances)"),
     FitParameter("bypass", "volumetric", "bypass_area_m2", 0.0, 1e-4, "m²",
