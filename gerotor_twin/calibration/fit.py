@@ -101,10 +101,12 @@ class Evaluator:
         if self.jobs == 1 or len(tasks) < 2:
             out = [plateau_flow(t) for t in tasks]
         else:
+            first = []
             if self._pool is None:   # compile/load the kernel here first: forked workers inherit it
-                plateau_flow(tasks[0])
+                first = [plateau_flow(tasks[0])]
                 self._pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("fork"))
-            out = list(self._pool.map(plateau_flow, tasks, chunksize=max(1, len(tasks) // (4 * self.jobs))))
+            rest = tasks[len(first):]
+            out = first + list(self._pool.map(plateau_flow, rest, chunksize=max(1, len(rest) // (4 * self.jobs))))
         self._runs.update(zip(todo, out))
         self.simulated += len(tasks)
         if self.progress:
