@@ -81,10 +81,10 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
 
     import yaml
 
-    from ..calibration.command import calibrate_bags, fitted_config
+    from ..calibration.command import BENCH_CANDIDATES, calibrate_bags, fitted_config
     from ..calibration.plateaus import DetectorSettings, thermometer_lag_note
-    try:
-        res = calibrate_bags([bag], config_path=config, model=model, jobs=1,
+    try:                          # as `calibrate --bench` does it: its candidate sets, cross-validated
+        res = calibrate_bags([bag], config_path=config, model=model, jobs=1, cv="auto", candidates=BENCH_CANDIDATES,
                              detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s))
         (out_dir / "pump_fitted.yaml").write_text(yaml.safe_dump(fitted_config(res), sort_keys=False))
         (out_dir / "calibration.json").write_text(json.dumps(res, indent=1, default=float))
