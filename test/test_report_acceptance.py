@@ -93,6 +93,11 @@ def test_cli_verdicts_and_check_exit_status(tmp_path, capsys):
     assert main(base + ["--tol-eta-pts", "x"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "--tol-eta-pts" in err and len(err.strip().splitlines()) == 1
+    assert main(base + ["--flow-sensor-tau", "-0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "--flow-sensor-tau" in err and "[0, 60] s" in err and len(err.strip().splitlines()) == 1
+    assert main(base + ["--flow-sensor-tau", "0.2"]) == 0    # the lag noted, the verdict still reported
+    assert "through a first-order lag of 0.2 s" in capsys.readouterr().err
 
 
 def test_two_twins_verdicts_side_by_side(tmp_path):

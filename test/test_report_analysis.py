@@ -4,7 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from gerotor_twin.report.analysis import binned, compare, error_stats, find_plateaus, make_grid, revolution_phase
+from gerotor_twin.report.analysis import (Grid, Plateau, binned, compare, error_stats, find_plateaus, make_grid,
+                                         read_through_lag, revolution_phase)
 from gerotor_twin.report.data import load_bench, load_twin, overlap
 from report_helpers import DISP, write_bench, write_twin
 
@@ -61,3 +62,41 @@ def test_revolution_phase(loaded):
     ph = revolution_phase(tw, DISP, np.array([ts[10], mid, ts[0] - 1.0]))
     assert ph[0] == pytest.approx(0.0, abs=1e-9) and ph[1] == pytest.approx(math.pi, rel=1e-6)
     assert math.isnan(ph[2])
+
+
+def test_read_through_lag_closed_form():
+    """Closed form: a first-order lag (τ = 0.4 s) reading a step from 0 to 1, sampled at irregular instants, is
+    1 − e^{−t/τ} at every sample (the input held over each interval is exact for a step); τ = 0 reads the
+    series as it is."""
+    t = np.concatenate([[0.0], np.cumsum(np.random.default_rng(1).uniform(0.005, 0.05, 200))])
+    v = np.where(t > 0, 1.0, 0.0)
+    assert read_through_lag(t, v, 0.4) == pytest.approx(1 - np.exp(-t / 0.4), abs=1e-12)
+    assert read_through_lag(t, v, 0.0) is not None and np.array_equal(read_through_lag(t, v, 0.0), v)
+
+
+def test_compare_reads_the_twin_through_the_flow_meter():
+    """Behaviour (closed-form bench): the pump's flow steps from 1e-4 to 2e-4 m³/s at t = 2 s and the bench's
+    meter (τ = 0.5 s) reads it as 2e-4 − 1e-4·e^{−(t−2)/τ} (bin means exact); the plateau from 2.5 s on starts
+    while the meter is still e⁻¹ behind.  A twin that predicts the flow exactly (samples every 5 ms) is judged
+    on the meter's lag without ``flow_sensor_tau_s`` (plateau bias 1e-4·τ(e⁻¹ − e^{−7.8})/3.4 s = +5.4e-6 m³/s,
+    2.7 % of the flow) and right with it, but for binning the twin's samples, each the value at its interval's
+    end: half a sample late, (5 ms / 2)·(y(end) − y(start))/T = 2.7e-8 m³/s at most (measured 1.2e-8)."""
+    from types import SimpleNamespace
+    tau, dt = 0.5, 0.1
+    edges = np.arange(0.0, 6.0 + dt / 2, dt)
+    a, b = np.maximum(edges[:-1], 2.0), np.maximum(edges[1:], 2.0)      # the lagged part of each bin after 2 s
+    lag = np.where(b > a, -1e-4 * tau * (np.exp(-(a - 2) / tau) - np.exp(-(b - 2) / tau)) / dt, 0.0)
+    after = (b - a) / dt                                                # share of the bin after the step
+    q_meas = 1e-4 + 1e-4 * after + lag
+    grid = Grid(t=0.5 * (edges[:-1] + edges[1:]), omega=np.full(60, 100.0), p_delivery=np.full(60, 2e6),
+                q_meas=q_meas)
+    ts = np.arange(0.005, 6.0, 0.005)
+    q = np.where(ts > 2.0 + 1e-12, 2e-4, 1e-4)
+    qth = np.full(ts.size, 2.5e-4)
+    twin = SimpleNamespace(summary=(ts, np.column_stack([q, qth, qth - q, q / qth])), label="twin", path="t")
+    plateau = [Plateau(1, 25, 59, 2.5, 5.9, 955.0, 19.0)]
+    plain = compare(grid, plateau, twin, 2.5e-4 * 2 * math.pi / 100.0)["plateaus"][0]["flow_error_m3s"]["bias"]
+    read = compare(grid, plateau, twin, 2.5e-4 * 2 * math.pi / 100.0, 0.5)["plateaus"][0]["flow_error_m3s"]["bias"]
+    expect = 1e-4 * tau * (np.exp(-0.5 / tau) - np.exp(-3.9 / tau)) / 3.4
+    assert plain == pytest.approx(expect, rel=0.02)
+    assert abs(read) <= 0.005 / 2 * 1e-4 * (np.exp(-1.0) - np.exp(-7.8)) / 3.4

@@ -16,6 +16,10 @@ Definitions (SI inside; the HTML shows L/min, bar and %):
   measured speed / 2π)).  Per plateau and overall (all plateau samples):
   bias (mean error), RMSE, maximum absolute error; ``whole_run`` uses every
   grid sample (transients included, so flow-meter lag shows).
+* **Flow meter lag** (``flow_sensor_tau_s`` > 0, ``report --flow-sensor-tau``): the twin's flow is compared
+  as the bench's meter would read it, through a first-order lag of that time constant
+  (:func:`read_through_lag`), so a plateau that starts before a slow meter has settled is not judged on
+  the meter's lag.
 """
 from __future__ import annotations
 
@@ -27,7 +31,7 @@ import numpy as np
 from ..units import P_ATM, pa_abs_to_bar_gauge, rad_s_to_rpm
 from .data import BenchData, TwinData
 
-__all__ = ["Grid", "Plateau", "make_grid", "find_plateaus", "error_stats", "compare"]
+__all__ = ["Grid", "Plateau", "make_grid", "find_plateaus", "error_stats", "compare", "read_through_lag"]
 
 
 @dataclass
@@ -154,8 +158,29 @@ def error_stats(err: np.ndarray) -> dict:
             "n": int(e.size)}
 
 
-def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3: float) -> dict:
-    """Metrics of one twin against the bench.
+def read_through_lag(t: np.ndarray, v: np.ndarray, tau: float) -> np.ndarray:
+    r"""The series ``v`` (samples at ``t`` [s], each the mean over the interval that ends at its time, as the
+    twin's revolution summaries are) as a first-order-lag sensor of time constant ``tau`` [s] reads it:
+
+    .. math:: y_k = v_k + (y_{k-1} - v_k)\, e^{-(t_k - t_{k-1})/\tau},\qquad y_0 = v_0
+
+    exact for v held over each interval (:math:`\tau \dot y = v - y`); ``tau`` ≤ 0 returns ``v``.
+    """
+    v = np.asarray(v, dtype=float)
+    if not tau > 0 or v.size == 0:
+        return v
+    decay = np.exp(-np.diff(np.asarray(t, dtype=float)) / tau)
+    y = np.empty_like(v)
+    y[0] = v[0]
+    for k in range(1, v.size):
+        y[k] = v[k] + (y[k - 1] - v[k]) * decay[k - 1]
+    return y
+
+
+def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3: float,
+            flow_sensor_tau_s: float = 0.0) -> dict:
+    """Metrics of one twin against the bench; with ``flow_sensor_tau_s`` > 0 [s] the twin's flow as the bench's
+    meter reads it (:func:`read_through_lag`), its η_v from that flow.
 
     Returns
     -------
@@ -165,8 +190,14 @@ def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3
         plateau samples) and ``whole_run`` (every grid sample) error stats.
     """
     ts, v = twin.summary
-    q_pred = on_grid(grid, ts, v[:, 0])
-    eta_pred = on_grid(grid, ts, v[:, 3])
+    if flow_sensor_tau_s > 0:
+        q_read = read_through_lag(ts, v[:, 0], flow_sensor_tau_s)
+        q_pred = on_grid(grid, ts, q_read)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            eta_pred = on_grid(grid, ts, np.where(v[:, 1] > 0, q_read / v[:, 1], np.nan))
+    else:
+        q_pred = on_grid(grid, ts, v[:, 0])
+        eta_pred = on_grid(grid, ts, v[:, 3])
     qth_meas = displacement_m3 * grid.omega / (2 * math.pi)
     with np.errstate(divide="ignore", invalid="ignore"):
         eta_meas = np.where(qth_meas > 0, grid.q_meas / qth_meas, np.nan)
