@@ -157,7 +157,10 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat, reuse=False):
             gap_coefficients(tab, theta, k, cmat[k])
         h_out[k] = gap_value(cmat[k], delta, ex, ey, 0.0)
     gamma = 0.0
-    if np.min(h_out) >= 0.0:
+    lowest = h_out[0]
+    for k in range(1, n):               # not np.min: its empty-array error compiles for nothing (0.5 s)
+        lowest = min(lowest, h_out[k])
+    if lowest >= 0.0:
         if tab.turn_inner:
             gamma = _rotation_to_touch(cmat, h_out, ex, ey)
     else:

@@ -183,7 +183,9 @@ def coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     tab, pc = km.tab, km.pc
     n = pc.n
     if gc[GC_RAW1_OK] != 0.0 and gc[GC_TH_RAW1] == theta:              # the last step ended at θ
-        rows[:, ROW_RAW0:ROW_RAW0 + 3] = rows[:, ROW_RAW1:ROW_RAW1 + 3]
+        for j in range(n):              # a loop: an array-to-slice copy compiles numba's shape-error message (2.3 s)
+            for k in range(3):
+                rows[j, ROW_RAW0 + k] = rows[j, ROW_RAW1 + k]
     else:
         _table_values(theta, tab, n, rows, ROW_RAW0)
     cp = 0.0
