@@ -2,13 +2,16 @@
 #   make demo   set up .venv, install everything, run the main job
 #   make test   same set-up, then the whole test suite on every core (pytest-xdist)
 # `make setup` also compiles the model's numba kernels once (python -m gerotor_twin.precompile: the
-# mobility and fixed-centre models, 30-60 s on 2 shared cores) into the on-disk cache, so no first
+# mobility and fixed-centre models, 30-60 s on 2 shared cores, beside the install) into the on-disk cache, so no first
 # start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 5-25 s, with a line saying so);
 # the cache holds only the argument types, so it serves every pump, table size and fluid model.
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+# what the kernels' compile imports (the pins of requirements.txt): installed first, so the compile runs on one
+# core while the rest installs on the other (docs/performance.md, "First compile")
+KERNEL_REQS := $(shell grep -E '^(numpy|scipy|numba|PyYAML)==' requirements.txt)
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
 
@@ -19,9 +22,10 @@ setup: $(STAMP)
 $(STAMP): requirements.txt setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -r requirements.txt
-	$(PY) -m pip install --quiet --no-deps -e .
-	$(PY) -m gerotor_twin.precompile
+	$(PY) -m pip install --quiet $(KERNEL_REQS)
+	$(PY) -m gerotor_twin.precompile > $(VENV)/precompile.log 2>&1 & compile=$$!; \
+	  $(PY) -m pip install --quiet -r requirements.txt && $(PY) -m pip install --quiet --no-deps -e .; installed=$$?; \
+	  wait $$compile; compiled=$$?; cat $(VENV)/precompile.log; test $$installed -eq 0 -a $$compiled -eq 0
 	touch $(STAMP)
 
 # the numba cache again (after `git pull`, say; a kernel source changed: its first start would compile)
