@@ -182,6 +182,23 @@ def test_air_parameter_sets_the_free_air_closed_form():
     assert raw["mixture"]["air_fraction"] == 1e-3                      # the prior untouched
 
 
+def test_plateaus_outside_the_envelope_are_named_and_left_out():
+    """Behaviour: a plateau a biased pressure sensor reads just beyond the pump's top pressure (27.64 bar on a
+    27.5 bar pump) is left out of the fit with one reason naming the field, value and range — not a traceback
+    from the steady run — and the plateaus inside are kept; a shaft speed beyond the top speed likewise."""
+    import math
+
+    from gerotor_twin.calibration.plateaus import PlateauRecord, split_by_envelope
+    cfg = load_config()
+    p_atm = cfg.fluid.atmospheric_pa
+    rec = lambda i, rpm, bar: PlateauRecord("b.mcap", i, 0.0, 1.0, rpm * math.pi / 30, p_atm + bar * 1e5,  # noqa: E731
+                                            float("nan"), 50.0, 1e-4, 1e-7, 10)
+    kept, out = split_by_envelope([rec(1, 1000, 10.0), rec(2, 2000, 27.64), rec(3, 3100, 5.0)], cfg)
+    assert [r.index for r in kept] == [1] and [r.index for r, _ in out] == [2, 3]
+    assert "delivery_pressure" in out[0][1] and "27.5 bar" in out[0][1]
+    assert "shaft_speed" in out[1][1] and "3000 rpm" in out[1][1]
+
+
 def test_thermometer_lag_note():
     """Behaviour: a note names the fastest oil drift on the plateaus and the reading lag it makes (closed
     form τ × slope) when no lag is set; nothing when the oil is steady, the slope unknown or a lag set."""

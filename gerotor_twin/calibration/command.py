@@ -24,7 +24,7 @@ from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
 from .fit_model import apply, parse_params
-from .plateaus import DetectorSettings, bench_plateaus
+from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
 from .pump_map import MapLimits, PumpMapError, read_map
@@ -85,12 +85,17 @@ def calibrate_bags(bags, *, config_path=None, detector: DetectorSettings = Detec
         found = bench_plateaus(b, detector)
         say(f"{b}: {len(found)} plateaus")
         records += found
+    records, outside = split_by_envelope(records, load_config(config_path))
+    for r, why in outside:
+        say(f"{r.label()}: outside the pump's input envelope, not used: {why}")
     if not records:
         raise InputError("--bench", ", ".join(map(str, bags)), "recordings with at least one steady plateau "
-                         f"(≥ {detector.min_s + detector.settle_s:g} s of constant speed and pressure)")
+                         f"(≥ {detector.min_s + detector.settle_s:g} s of constant speed and pressure) inside the "
+                         "pump config's range")
     out = calibrate_records(records, [str(b) for b in bags], config_path=config_path, progress=progress,
                             **fit_options)
     out["detector"] = detector.__dict__
+    out["excluded_plateaus"] = [{"plateau": r.label(), "reason": why} for r, why in outside]
     return out
 
 
@@ -444,6 +449,9 @@ def cmd_calibrate(args) -> int:
     print(f"wrote {out} ({res['simulations']} plateau simulations on {res['jobs']} processes, "
           f"{res['wall_time_s']:.1f} s)")
     print_summary(res)
+    for row in res.get("excluded_plateaus", []):
+        print(f"note: {row['plateau']} not used: outside the pump's input envelope ({row['reason']}); the pump "
+              "config's `range` sets it")
     from .plateaus import thermometer_lag_note
     note = None if args.map else thermometer_lag_note(res["plateau_records"], det.oil_sensor_tau_s)
     if note:

@@ -17,7 +17,8 @@ from ..report.analysis import binned, find_plateaus, make_grid
 from ..report.data import load_bench
 from ..units import pa_abs_to_bar_gauge, rad_s_to_rpm
 
-__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus", "lag_undone_mean", "thermometer_lag_note"]
+__all__ = ["PlateauRecord", "DetectorSettings", "bench_plateaus", "lag_undone_mean", "split_by_envelope",
+           "thermometer_lag_note"]
 
 #: Oil warming or cooling on a plateau beyond which an unset thermometer lag is worth a note [K/s].
 OIL_DRIFT_NOTE_K_S = 0.05
@@ -172,6 +173,27 @@ def bench_plateaus(path, settings: DetectorSettings = DetectorSettings()) -> lis
             oil_temperature_c=oil, flow_m3s=flow, flow_sem_m3s=sem, bins=int(q.size),
             oil_slope_k_s=slope))
     return out
+
+
+def split_by_envelope(records, config) -> tuple[list, list[tuple[object, str]]]:
+    """The plateaus inside the input envelope of the pump ``config`` (:func:`gerotor_twin.model.records.check_inputs`,
+    the twin's own check) and those outside it, each with the reason (field, value, allowed range): a plateau a
+    biased sensor reads just beyond the pump's top pressure is left out with that line, not fitted.
+    ``records``: :class:`PlateauRecord` (or anything with ``omega``, ``p_suction_pa``, ``p_delivery_pa`` and
+    ``oil_temperature_c``, SI and °C; NaN: not measured)."""
+    from ..errors import InputError
+    from ..model.records import Inputs, check_inputs
+    from ..units import celsius_to_kelvin
+    kept, out = [], []
+    for r in records:
+        ps = r.p_suction_pa if math.isfinite(r.p_suction_pa) else config.boundary.suction_pressure_pa
+        oil = celsius_to_kelvin(r.oil_temperature_c) if math.isfinite(r.oil_temperature_c) else None
+        try:
+            check_inputs(config, Inputs(r.omega, ps, r.p_delivery_pa, oil))
+            kept.append(r)
+        except InputError as exc:
+            out.append((r, str(exc)))
+    return kept, out
 
 
 def thermometer_lag_note(records, tau_s: float) -> str | None:

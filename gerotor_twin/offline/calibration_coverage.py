@@ -158,7 +158,7 @@ def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None, con
     the nominal pump the bench pump derives from (the profiles scaled to its range)."""
     from ..bench_emulator import BenchSpec, get_profile, synthesize
     from ..calibration.command import calibrate_bags
-    from ..calibration.plateaus import DetectorSettings, bench_plateaus
+    from ..calibration.plateaus import DetectorSettings, bench_plateaus, split_by_envelope
     from dataclasses import replace
     bp = load_bench_pump(pump)
     spec = bp.bench_spec(BenchSpec(seed=seed))
@@ -174,8 +174,8 @@ def evaluate_bags(pump: Path, seed: int, out: Path, jobs: int | None = None, con
     det = DetectorSettings(oil_sensor_tau_s=spec.temperature_tau_s, flow_sensor_tau_s=spec.flow_tau_s)
     res = calibrate_bags([bags["map"]], detector=det, config_path=config, params=("tip", "lateral"), cv="auto",
                          candidates=BENCH_CANDIDATES, jobs=jobs)
-    held = bench_plateaus(bags["transient"], det)
-    return {"seed": seed, "config": str(config or "config/pump.yaml"), "bags": {k: str(v) for k, v in bags.items()},
+    held, outside = split_by_envelope(bench_plateaus(bags["transient"], det), cfg)
+    return {"seed": seed, "held_out_outside_envelope": [why for _, why in outside], "config": str(config or "config/pump.yaml"), "bags": {k: str(v) for k, v in bags.items()},
             **judge(res, held, bp.name, jobs, config)}
 
 
