@@ -2,8 +2,8 @@
 #   make demo   set up .venv, install everything, run the main job
 #   make test   same set-up, then the whole test suite on every core (pytest-xdist)
 # `make setup` also compiles the model's numba kernels once (python -m gerotor_twin.precompile: the
-# mobility and fixed-centre models, 30-60 s on 2 shared cores, beside the install) into the on-disk cache, so no first
-# start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 5-25 s, with a line saying so);
+# mobility and fixed-centre models, about 30 s on 2 cores, beside the install) into the on-disk cache, so no first
+# start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 3-11 s, with a line saying so);
 # the cache holds only the argument types, so it serves every pump, table size and fluid model.
 PYTHON ?= python3
 VENV   := .venv

@@ -1,14 +1,14 @@
 """Build the numba cache at install time: ``python -m gerotor_twin.precompile``.
 
-The first model start compiles the stepper (38 specialisations, ≈ 30–60 s on two shared cores);
+The first model start compiles the stepper (40 specialisations, ≈ 30 s on the dev machine's two cores);
 ``make setup`` runs this module once so that no user waits for it.  It runs
 what a first model start runs — a few output steps of the default pump with
 each gear model given (default: ``mobility``, the twin's, and ``fixed``, which adds
 nothing to it), an oil-temperature change, a zero-length call — so numba compiles
 and caches exactly the specialisations a user hits.  The other gear models (Method 1
-``short``, ``fdm``) add 7 and 5 small specialisations of their own, ≈ 4–6 s each: they
+``short``, ``fdm``) add 8 and 5 small specialisations of their own, ≈ 3–5 s each: they
 compile on their first use, announced by one line (:class:`announce_compilation`), and
-are cached from then on; so does ``numerics.gear_coupling: constrained``, a stepper of its own (≈ 25 s).  The compiled code depends on the argument *types* only,
+are cached from then on; so does ``numerics.gear_coupling: constrained``, a stepper of its own (≈ 11 s).  The compiled code depends on the argument *types* only,
 never on a pump's data (:func:`gerotor_twin._jit.typed` keeps the types the same for
 every pump, table size and fluid model), so the cache serves any pump.  A second run,
 or a run after an edit of a module the kernel does not use, compiles nothing and takes

@@ -236,3 +236,28 @@ def test_precompile_expect_cached_exits_1_when_it_had_to_compile(tmp_path):
                            timeout=300) for _ in range(2)]
     assert runs[0].returncode == 1 and "compiled" in runs[0].stdout and "nothing" not in runs[0].stdout, runs[0]
     assert runs[1].returncode == 0 and "nothing compiled" in runs[1].stdout, runs[1]
+
+
+# ------------------------------------------------------------------ one compile of each inlined helper
+def _njit_calls(path, names):
+    """(function, call) for every call of ``names`` inside a compiled function of the file at ``path``."""
+    import ast
+    tree = ast.parse(path.read_text())
+    for fn in ast.walk(tree):
+        if isinstance(fn, ast.FunctionDef) and any("njit" in ast.unparse(d) for d in fn.decorator_list):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in names:
+                    yield fn.name, node
+
+
+def test_the_stepper_passes_its_flags_typed_so_each_helper_compiles_once():
+    """``rhs(..., want_jac)`` and ``contact(..., reuse)`` are called from compiled code with ``bool(...)``: a
+    literal ``True``/``False`` (or the flag left out) is a numba type of its own, so each value would compile
+    the helper again (``rhs``: ≈ 6 s of the install's compile, docs/performance.md, "First compile")."""
+    calls = [(f.name, fn, ast_call) for f in (PKG / "model" / "kernel.py", PKG / "model" / "coupled_reference.py")
+             for fn, ast_call in _njit_calls(f, {"rhs", "contact"})]
+    assert len(calls) >= 6                       # rhs twice and contact three times in the stepper, at least
+    for file, fn, call in calls:
+        flag = call.args[8] if len(call.args) > 8 else None
+        ok = (flag is not None and type(flag).__name__ == "Call" and getattr(flag.func, "id", "") == "bool")
+        assert ok, f"{file}:{call.lineno} ({fn}): {call.func.id}(...) needs its flag as bool(...)"

@@ -141,6 +141,8 @@ def contact(tab, n, delta, theta, ex, ey, h_out, cmat, reuse=False):
     reuse : bool
         ``cmat`` already holds the coefficients at this θ (a second call at the
         same angle with another displacement): they are not interpolated again.
+        The stepper passes ``bool(...)``, never a literal or nothing: each of those is a type of its own
+        and a compile of its own (:func:`.flows.rhs`, Notes).
 
     Returns
     -------

@@ -76,7 +76,7 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     y = z[:n1]
     ex, ey = z[n1], z[n1 + 1]
     theta = theta0 + op.omega * t
-    _x, _y, _gam, kc = contact(tab, n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
+    _x, _y, _gam, kc = contact(tab, n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, bool(False))
     to_pressures(y, km, ws.pres)
     fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)    # Eqs. (24)-(27)
     bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
@@ -96,7 +96,7 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     vx, vy, _l1, _l2 = constrained_velocity(vx, vy, c)
     ws.disp[0], ws.disp[1], ws.disp[2], ws.disp[3] = ex, ey, vx, vy      # volumes at e, squeezed by ė (volumes.py)
     ws.gear[GC_ON] = 0.0
-    rhs(y, theta, ws.gaps0, km, op, ws, ws.f0, ws.jac, False)
+    rhs(y, theta, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(False))
     for i in range(n1):
         out[i] = ws.f0[i]
     out[n1] = vx

@@ -344,7 +344,7 @@ def closing_share(n, h, jac, out):
             out[n] += jac[j, n1 + J_CDN] * c
 
 
-@njit(inline="always")
+@njit(forceinline=True)
 def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     """dy/dt [1/s] into ``f`` (and ∂f/∂(y, t) into ``jac`` if ``want_jac``); flows into ``ws.flows``.
 
@@ -357,6 +357,14 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     gaps : ndarray (N,)
         Tooth-tip gap heights at θ [m] (from :func:`gerotor_twin.model.contact.contact`).
     km, op, ws : KernelModel, Operating, Workspace
+
+    Notes
+    -----
+    Inlined by LLVM (``forceinline``), not at numba's IR level: numba compiles it once, where an IR-inlined
+    function is typed and lowered again at every call site.  The kernel's callers pass ``want_jac`` as
+    ``bool(True)`` / ``bool(False)``: a literal ``True`` would be typed ``Literal[bool]`` and numba would compile
+    one specialisation per value; after LLVM has inlined the call, the constant prunes the Jacobian's branches
+    all the same (docs/performance.md, "First compile").
     """
     n = km.pc.n
     volume_states(y, km, op, ws)

@@ -275,7 +275,7 @@ def set_constraint(ex, ey, theta, h, km, gc):
     gc[GC_CON] = 1.0
 
 
-@njit(inline="always")
+@njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
 def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
     load (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1])."""
@@ -314,7 +314,7 @@ def close_pending(gc):
     gc[GC_PEND] = 0.0
 
 
-@njit(inline="always")
+@njit(forceinline=True)
 def gear_move(ex, ey, theta, km, pres, gc, rows):
     """The gear's position [m] after the output step from (ex, ey): the start plus ∫ė dt of the stages; and the
     coupled load at the end pressures ``pres`` [Pa] and θ [rad] (contact held from the step start) [N].

@@ -172,7 +172,7 @@ def _track_peak(y, h, n, ws):
                     ws.peak[i] = m
 
 
-@njit
+@njit(forceinline=True)     # inlined by LLVM at its three sites, compiled once by numba (docs/performance.md)
 def _first_stage(y, th, km, op, ws, integrals, big_h):
     """RHS and Jacobian at (y, θ, ``ws.gaps0``) into ``ws.f0``/``ws.jac``; flow integrals closed.
 
@@ -181,7 +181,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     so ∫ flow dt uses the flows of the accepted states, at no extra RHS; and its
     chamber peaks are tracked (:func:`_track_peak`).
     """
-    rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, True)
+    rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(True))   # bool(): not a literal (flows.rhs, Notes)
     if ws.gear[GC_ON] != 0.0:
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
@@ -222,7 +222,7 @@ def ros2_step(y, th, h, km, op, ws):
     lu_solve(ws.lu, ws.piv, ws.k1, ws.k1)
     for i in range(n1):
         ws.y1[i] = y[i] + h * ws.k1[i]
-    rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, False)
+    rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(False))
     for i in range(n1):
         ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
@@ -251,7 +251,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     h_min = big_h * 1e-5
     done = 0.0
     # gaps at the end of the output step; inside it they are interpolated linearly in time
-    contact(km.tab, pc.n, pc.tip_clearance, theta + op.omega * big_h, ex, ey, ws.gaps_end, ws.cmat)
+    contact(km.tab, pc.n, pc.tip_clearance, theta + op.omega * big_h, ex, ey, ws.gaps_end, ws.cmat, bool(False))
     for k in range(pc.n):
         ws.gaps_start[k] = ws.gaps0[k]
     attempts = 0
@@ -335,7 +335,7 @@ def heun_step(velocity, bparams, ex, ey, h, theta, omega, kc, km, ws, counters):
     counters[C_CONTACT_UNLOADED] += unl
     d1x, d1y = velocity(ex, ey, fx, fy, omega2, bparams)
     px, py, _g, kc2 = contact(km.tab, pc.n, pc.tip_clearance, theta, ex + h * d1x, ey + h * d1y, ws.gaps1,
-                              ws.cmat, True)      # ws.cmat holds θ's coefficients (pressure_step)
+                              ws.cmat, bool(True))      # ws.cmat holds θ's coefficients (pressure_step)
     fx2, fy2, _fc2, _unl2 = outer_gear_load(ws.pres, theta, omega, px, py, kc2, km)
     d2x, d2y = velocity(px, py, fx2, fy2, omega2, bparams)
     ex, ey = housing_cap(ex + 0.5 * h * (d1x + d2x), ey + 0.5 * h * (d1y + d2y), pc, counters)
@@ -400,7 +400,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     # the gear inside the stages (numerics.gear_coupling: model/gear_coupling.py); MOVE_EXTERNAL: set up by
     # the caller (integrate_external), one output step per call
     coupled = move != MOVE_FIXED and gear_in_stages(km)
-    ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
+    ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat, bool(False))
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     if not coupled:
         ws.gear[GC_ON] = 0.0
@@ -446,7 +446,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         if constraint is not None and coupled:        # back onto the teeth along G n, as inside the step
             ex, ey, _ok = pull_back_along(ws.cmat, pc.tip_clearance, ex, ey, ws.gear[GC_GXX], ws.gear[GC_GXY],
                                           ws.gear[GC_GYX], ws.gear[GC_GYY], ws.gear[GC_PAIR:GC_PAIR + 10])
-        ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, True)
+        ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, bool(True))
         move_volumes(km.tab, ws.disp, ex, ey, h)
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1

@@ -265,7 +265,7 @@ class PumpModel:
             return contextlib.nullcontext()
         self._announced = True
         if self.kernel.pc.gear_constrained and self._move != K.MOVE_EXTERNAL:
-            what, how_long = "the stepper with numerics.gear_coupling: constrained", "about half a minute"
+            what, how_long = "the stepper with numerics.gear_coupling: constrained", "about ten seconds"
         else:
             what, how_long = f"the {self.bearing_name} gear model", "seconds to half a minute"
         return announce_compilation(f"gerotor_twin: compiling {what} on its first use (once: {how_long}; "

@@ -57,7 +57,7 @@ def displace_chamber(tab, i0, i1, f, j, disp, geo, acc, c_v, c_dv):
     acc[j] -= fx * disp[2] + fy * disp[3]                 # squeeze by the gear's last move [m³/s]
 
 
-@njit(inline="always")
+@njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
 def move_volumes(tab, disp, ex, ey, h):
     """The chamber volumes follow the gear to (ex, ey) [m], moved over the last step h [s] (0: placed).
 
