@@ -42,6 +42,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap_ros2.decoder import DecoderFactory
 
 from gerotor_twin.errors import InputError
+from gerotor_twin.io import cdr_arrays
 from gerotor_twin.io.messages import ns_from_stamp
 from gerotor_twin.io.schemas import normalize_msgtype
 
@@ -50,6 +51,8 @@ __all__ = [
     "open_mcap", "read_topics", "topic_types", "metadata", "require",
     "scalar_series", "multiarray_series", "multiarray_values",
 ]
+
+cdr_arrays.apply()            # numeric array fields in one struct call each (cdr_arrays: 7 of a report's 14 s)
 
 PathLike = Union[str, Path]
 #: A file path, or an MCAP already in memory (bytes or a binary stream such as io.BytesIO).
