@@ -16,10 +16,13 @@ from typing import Any, Callable
 from mcap_ros2._dynamic import generate_dynamic
 
 from gerotor_twin.errors import InputError
+from gerotor_twin.io import cdr_arrays
 from gerotor_twin.io.fastcdr import decode_fast
 from gerotor_twin.io.schemas import message_definition
 
 __all__ = ["decoder_for", "decode"]
+
+cdr_arrays.apply()            # the same array readers as a reader of the log (io.reader)
 
 
 @functools.lru_cache(maxsize=None)
