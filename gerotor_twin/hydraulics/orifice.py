@@ -246,7 +246,7 @@ def laminar_turbulent_flow(dp, area, cd, delta, rho, mu):
     return (q if dp >= 0.0 else -q), dq
 
 
-@njit(inline="always")
+@njit(forceinline=True)     # five sites in the stepper: compiled once, inlined by LLVM
 def port_orifice_flow(dp, area, law, cd, lambda_crit, delta, rho, mu):
     """Eq. (21) of [1] with the configured law: ``LAW_MERRITT`` or ``LAW_FLOW_NUMBER``; (Q, dQ/dΔp)."""
     if law == LAW_MERRITT:
