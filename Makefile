@@ -15,7 +15,7 @@ KERNEL_REQS := $(shell grep -E '^(numpy|scipy|numba|PyYAML)==' requirements.txt)
 # ... installed without their byte code (6 s instead of 13 s before the compile can start); the compile writes the
 # byte code of what it imports, and compileall the rest of these packages' on the other core after the install
 KERNEL_PKGS := numpy scipy numba llvmlite yaml _yaml
-export KERNEL_DIRS := import os, sys, sysconfig; s = sysconfig.get_paths()["purelib"]; \
+KERNEL_DIRS := import os, sys, sysconfig; s = sysconfig.get_paths()["purelib"]; \
   print(" ".join(d for d in (os.path.join(s, n) for n in sys.argv[1:]) if os.path.isdir(d)))
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export PYTHONDONTWRITEBYTECODE :=
@@ -30,7 +30,7 @@ $(STAMP): requirements.txt setup.py
 	$(PY) -m pip install --quiet --no-compile $(KERNEL_REQS)
 	$(PY) -m gerotor_twin.precompile > $(VENV)/precompile.log 2>&1 & compile=$$!; \
 	  $(PY) -m pip install --quiet -r requirements.txt && $(PY) -m pip install --quiet --no-deps -e . && \
-	  $(PY) -m compileall -q $$($(PY) -c "$$KERNEL_DIRS" $(KERNEL_PKGS)); installed=$$?; \
+	  $(PY) -m compileall -q $$($(PY) -c '$(KERNEL_DIRS)' $(KERNEL_PKGS)); installed=$$?; \
 	  wait $$compile; compiled=$$?; cat $(VENV)/precompile.log; test $$installed -eq 0 -a $$compiled -eq 0
 	touch $(STAMP)
 

@@ -17,8 +17,9 @@ string and wide-string arrays keep ``mcap_ros2``'s own readers.
 decode time), for the ``mcap-ros2-support`` releases they were checked against (:data:`CHECKED`); with any
 other it does nothing.  Applied by :mod:`gerotor_twin.io.reader` and :mod:`gerotor_twin.io.decode` on import:
 everything read back through ``mcap_ros2`` (logs, recordings, reports) and what the node decodes with it (the
-bench inputs themselves are decoded at fixed offsets by :mod:`gerotor_twin.io.fastcdr`).  Measured (2026-12-05, the demo's 20 MB node log, fastest of 3):
-:func:`gerotor_twin.io.reader.read_topics` 2.17 → 1.51 s; the demo's report 4.97 → 4.37 s.
+bench inputs themselves are decoded at fixed offsets by :mod:`gerotor_twin.io.fastcdr`).  Measured
+(2026-12-05, the demo's 20 MB node log, fastest of 3): :func:`gerotor_twin.io.reader.read_topics` 2.17 → 1.51 s;
+the demo's report 4.97 → 4.37 s.
 
 References
 ----------
