@@ -174,14 +174,16 @@ def test_closing_port_share_stops_at_the_closing_angle(warm):
                                               rel=1e-12)
 
 
-def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
+def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes_or_suction_port_seals(warm):
     """Closed form: with the pressure measure the weight of volume i is max(β_i / (tol·Δp_ref), 1/tol_lnρ),
     Δp_ref = max(p_d − p_s, 1 bar, the chamber pressures' recent range carried in the state);
     for a chamber whose delivery port is closing within the horizon H or has just opened (within H/4: its age
     A_d / (ω dA_d/dθ), the time to close backwards in time) tol is multiplied by
     ``numerics.closing_tolerance`` (0.15 in the packaged config) and β_i replaced by max(β_i, β(p_d)) (its ln ρ
-    error counts as it will at delivery pressure), elsewhere not.  The flag is computed here from the port
-    areas and slopes, apart from the code under test (``step_control.port_event``)."""
+    error counts as it will at delivery pressure), elsewhere not; a chamber whose suction port closes within H
+    is weighed with max(β_i, β(p_d)) at tol (it is sealed next and then filled to delivery pressure).  The flags
+    are computed here from the port areas and slopes, apart from the code under test (``step_control.port_event``,
+    ``flows.time_to_close``)."""
     m, inp, s = warm
     km = m.kernel
     pc = km.pc
@@ -201,16 +203,20 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes(warm):
             closes = a > 0 and slope < 0 and a / (-slope * op.omega) < horizon
             opened = a > 0 and slope > 0 and a / (slope * op.omega) < 0.25 * horizon
             closing = closes or opened
+            a_s, slope_s = ws.geo[j, F.G_AS], ws.geo[j, F.G_DAS]
+            sealing = not closing and a_s > 0 and slope_s < 0 and a_s / (-slope_s * op.omega) < horizon
             if opened:
                 seen["opened"] = seen.get("opened", 0) + 1
+            if sealing:
+                seen["sealing"] = seen.get("sealing", 0) + 1
             tol = pc.tolerance * (pc.closing_tolerance if closing else 1.0)
-            beta = max(ws.beta[j], op.beta_d) if closing else ws.beta[j]
+            beta = max(ws.beta[j], op.beta_d) if closing or sealing else ws.beta[j]
             want = max(beta / (tol * scale), 1.0 / pc.log_density_tolerance)
             assert ws.wt[j] == pytest.approx(want, rel=1e-12), (theta, j, closing)
             seen[closing] += beta / (tol * scale) > 1.0 / pc.log_density_tolerance
             if closing and ws.beta[j] < 0.5 * op.beta_d:                 # a just-opened chamber, still soft
                 seen["soft"] = seen.get("soft", 0) + 1
-    assert seen[True] and seen[False] and seen["opened"] and seen["soft"], seen
+    assert seen[True] and seen[False] and seen["opened"] and seen["soft"] and seen["sealing"], seen
 
 
 @pytest.fixture(scope="module")

@@ -72,14 +72,16 @@ def _family_peak_errors(pump: str, rpm: float, bar: float, field: str, values) -
     return {v: e["peak_pressure_error_gauge"] for v, e in _family_errors(pump, rpm, bar, field, values).items()}
 
 
-@pytest.mark.parametrize("pump,rpm,bar", [("09_power_pack", 1800.0, 2.0), ("10_diesel_engine_oil", 3500.0, 0.7),
+@pytest.mark.parametrize("pump,rpm,bar", [("09_power_pack", 1800.0, 2.0), ("10_diesel_engine_oil", 3500.0, 7.0),
                                           ("11_gearbox_lube", 1800.0, 0.6)])
 def test_closing_tolerance_brings_the_spike_peak_within_budget(pump, rpm, bar):
     """Behaviour against a fresh tight reference, mobility, three pumps of the family: without the tighter
     tolerance on chambers whose delivery port closes (``closing_tolerance`` 1) the spike's peak is missed by
-    more than the 2 % budget (−5.8 % on 09 at 1800 rpm / 2 bar, −3.2 % on 10 at 3500 rpm / 0.7 bar, −5.3 % on
-    11 at 1800 rpm / 0.6 bar, measured 2026-12-04), with the default 0.15 it is within (−1.1 / −0.3 / −1.2 %).
-    Over the family grid (docs/numerics.md) the factor 1 puts 11 more of the 54 points outside the budget."""
+    more than the 2 % budget (−3.4 % on 09 at 1800 rpm / 2 bar, −2.9 % on 10 at 3500 rpm / 7 bar, −4.2 % on
+    11 at 1800 rpm / 0.6 bar, measured 2026-12-05), with the default 0.15 it is within (−1.0 / −1.1 / −1.3 %).
+    Over the family grid (docs/numerics.md) the factor 1 puts 11 more of the 54 points outside the budget.
+    (10 at 3500 rpm / 0.7 bar no longer shows it: the defect check across a closing port, step_control, holds
+    its spike to −1.8 % without the factor.)"""
     from gerotor_twin.config import Numerics
     peak = _family_peak_errors(pump, rpm, bar, "closing_tolerance", (1.0, Numerics().closing_tolerance))
     assert Numerics().closing_tolerance == 0.15
@@ -91,15 +93,18 @@ def test_closing_tolerance_keeps_the_fill_front_of_a_refilled_chamber(cfg):
     """Behaviour against a fresh tight reference, mobility, 09 (power pack) at 1050 rpm / 2 bar: a chamber
     filled back from the delivery kidney through a still tiny port rises from suction to delivery pressure
     within a few degrees, and ROS2's embedded estimate hardly sees the front.  The closing tolerance holds a
-    chamber whose delivery port has just opened too: without it (``closing_tolerance`` 1) a sub-step jumps the
-    front, the largest pointwise error is 53.6 % of the waveform's range and the RMS 2.17 % (over the 1 % budget);
-    with 0.25 27.7 % and 0.87 %, with the default 0.15 3.4 % and 0.16 % (measured 2026-12-04).  The packaged config and the dataclass default agree."""
+    chamber whose delivery port has just opened too: without it (``closing_tolerance`` 1) the front lags, the
+    largest pointwise error is 5.6 % of the waveform's range, the RMS 0.37 % and the peak −3.8 % (over the 2 %
+    budget); with the default 0.15 2.0 %, 0.14 % and −0.9 % (measured 2026-12-05).  The packaged config and the
+    dataclass default agree."""
     from gerotor_twin.config import Numerics
     assert cfg.numerics.closing_tolerance == Numerics().closing_tolerance == 0.15
     err = _family_errors("09_power_pack", 1050.0, 2.0, "closing_tolerance", (1.0, 0.15))
-    assert err[1.0]["max_pressure_error_of_range"] > 0.1, err
-    assert err[0.15]["max_pressure_error_of_range"] < 0.05, err
-    assert err[1.0]["rms_pressure_error_of_range"] > 3.0 * err[0.15]["rms_pressure_error_of_range"], err
+    assert err[1.0]["max_pressure_error_of_range"] > 0.04, err
+    assert err[0.15]["max_pressure_error_of_range"] < 0.03, err
+    assert err[1.0]["rms_pressure_error_of_range"] > 2.0 * err[0.15]["rms_pressure_error_of_range"], err
+    assert abs(err[1.0]["peak_pressure_error_gauge"]) > BUDGET["peak_pressure_error_gauge"], err
+    assert abs(err[0.15]["peak_pressure_error_gauge"]) <= BUDGET["peak_pressure_error_gauge"], err
 
 
 def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):

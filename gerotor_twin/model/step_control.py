@@ -17,6 +17,11 @@ the standard controller of [1] (II.4, eq. (4.13); IV.8 for Rosenbrock methods): 
 local error is O(h^{q̂+1}).  Why the scale and the weights are what they are: docs/numerics.md ("The sub-step
 error scale", "Closing ports").
 
+Across a closing port that holds its chamber stiff (:func:`port_filtered`) the embedded estimate is blind: both
+of its solutions are filtered by W = I − γhJ at the sub-step's start, where the port is still open, while the
+chamber's quasi-equilibrium runs away as the area goes to zero.  There an accepted sub-step is checked once more
+by its defect at the new state (:func:`defect_error`, [3]), filtered by each volume's stiffness *there*.
+
 References
 ----------
 .. [1] E. Hairer, S.P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer
@@ -24,23 +29,33 @@ References
    Equations II*, 2nd ed., Springer 1996, sec. IV.8.
 .. [2] J.G. Verwer, E.J. Spee, J.G. Blom, W. Hundsdorfer, "A second-order Rosenbrock method applied to
    photochemical dispersion problems", SIAM J. Sci. Comput. 20 (1999) 1456–1480.
+.. [3] W.H. Enright, "A new error-control for initial value solvers", Appl. Math. Comput. 31 (1989) 288–301
+   (the defect of a continuous extension as the error control); [1] II, sec. IV.7 for ROS2's extension.
 """
 from __future__ import annotations
 
 import math
 
 from .._jit import njit
-from .flows import G_AD, G_DAD, time_to_close
+from ..hydraulics.orifice import port_orifice_flow
+from .flows import G_AD, G_AS, G_DAD, G_DAS, G_V, J_TCD, J_TCS, time_to_close
 from .params import CT_RANGE, ERROR_PRESSURE
 
 __all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "OPENED_WINDOW", "error_scale", "update_range", "port_event",
-           "error_weights", "embedded_error", "error_norm", "step_factor"]
+           "error_weights", "embedded_error", "error_norm", "step_factor", "port_filtered", "defect_error",
+           "B1_END", "B2_END"]
 
 SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
 FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
 FACTOR_MAX = 4.0    #: largest factor per sub-step [-]
 _TINY_NORM = 1e-8   #: below this the error norm says nothing about the step: grow by FACTOR_MAX
 OPENED_WINDOW = 0.25  #: a delivery port counts as just opened within this share of the closing horizon [-]
+_GAMMA = 1.0 + 1.0 / math.sqrt(2.0)            #: ROS2's γ [2]
+#: ROS2's continuous extension y(t + sh) = y + h(b₁(s)k₁ + b₂(s)k₂), b₂(s) = (s²/2 − γs)/(1 − 2γ), b₁ = s + b₂
+#: ([1] II, IV.7; ``kernel._track_peak``), differentiated at s = 1: its rate at the sub-step's end is
+#: B1_END·k₁ + B2_END·k₂
+B2_END = (1.0 - _GAMMA) / (1.0 - 2.0 * _GAMMA)
+B1_END = 1.0 + B2_END
 
 
 @njit(inline="always")
@@ -89,8 +104,10 @@ def error_weights(km, op, ws, horizon):
     first stage's port areas and slopes in ``ws.geo``) is held to ``closing_tolerance``·tol and weighed with
     max(β_i, β(p_d)): an error δ in its ln ρ, made while it is still near suction pressure where β_i is small,
     becomes a pressure error β(p_d)·δ once the delivery kidney has filled it (a just-opened chamber at 1 bar:
-    β_i ≈ 0.1 GPa against 1.5 GPa).  Log-density measure: w_i = 1/tol.  The delivered-volume quadrature
-    (imposed delivery pressure) has weight 0.
+    β_i ≈ 0.1 GPa against 1.5 GPa).  A chamber whose suction port closes within ``horizon`` is weighed with
+    max(β_i, β(p_d)) for the same reason (it is sealed next and then filled to delivery pressure: the mass it
+    holds when it is sealed sets when its pressure rises), at tol.  Log-density measure: w_i = 1/tol.  The
+    delivered-volume quadrature (imposed delivery pressure) has weight 0.
     """
     pc = km.pc
     for i in range(pc.n + 1):
@@ -102,6 +119,8 @@ def error_weights(km, op, ws, horizon):
             if i < pc.n and port_event(ws.geo[i, G_AD], ws.geo[i, G_DAD], op.omega, horizon):
                 tol *= pc.closing_tolerance                        # the spikes (docs/numerics.md)
                 beta = max(beta, op.beta_d)                        # its error, once at delivery pressure
+            elif i < pc.n and time_to_close(ws.geo[i, G_AS], ws.geo[i, G_DAS], op.omega, horizon) > 0.0:
+                beta = max(beta, op.beta_d)                        # sealed next, then filled to p_d
             ws.wt[i] = max(beta / (tol * error_scale(op, ws)), 1.0 / pc.log_density_tolerance)
         else:
             ws.wt[i] = 1.0 / pc.tolerance
@@ -143,3 +162,62 @@ def step_factor(en):
     if en < _TINY_NORM:
         return FACTOR_MAX
     return min(FACTOR_MAX, max(FACTOR_MIN, SAFETY / math.sqrt(en)))
+
+
+@njit(inline="always")
+def _port_stiff(pc, dp, area, beta, volume, gh):
+    """True if a port of open ``area`` [m²] at the pressure difference ``dp`` [Pa] across it makes its chamber
+    (bulk modulus ``beta`` [Pa], ``volume`` [m³]) stiff on the scale γh = ``gh`` [s]: γh·|∂Q/∂Δp|·β/V > 1."""
+    _q, dq = port_orifice_flow(dp, area, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta, pc.density,
+                               pc.viscosity)                                # Eq. (21)
+    return gh * abs(dq) * beta / volume > 1.0
+
+
+@njit(inline="always")
+def port_filtered(km, op, ws, h):
+    r"""True if the sub-step of h [s] about to be taken needs the defect check (:func:`defect_error`): a port whose
+    open area halves within it (its time to close, :func:`.flows.closing_ports` in the Jacobian's columns, below
+    2h) holds its chamber stiff at the start, :math:`\gamma h\,|\partial Q/\partial\Delta p|\,\beta/V > 1`.
+
+    The embedded estimate filters both of its solutions by W = I − γhJ of the start, where that port's
+    conductance dominates the chamber's row; as the area falls the chamber's quasi-equilibrium moves like
+    1/A², which the filtered stages do not see (docs/numerics.md, "Closing ports").  From the pressures, bulk
+    moduli and geometry in ``ws``: the first stage's, or after a rejected sub-step its second stage's (a gate
+    only; the times to close are the first stage's).
+    """
+    pc = km.pc
+    n = pc.n
+    n1 = n + 1
+    gh = _GAMMA * h
+    for j in range(n):
+        tcs = ws.jac[j, n1 + J_TCS]
+        if 0.0 < tcs < 2.0 * h and _port_stiff(pc, op.p_s - ws.p[j], ws.geo[j, G_AS], ws.beta[j], ws.geo[j, G_V],
+                                              gh):
+            return True
+        tcd = ws.jac[j, n1 + J_TCD]
+        if 0.0 < tcd < 2.0 * h and _port_stiff(pc, ws.p[n] - ws.p[j], ws.geo[j, G_AD], ws.beta[j], ws.geo[j, G_V],
+                                              gh):
+            return True
+    return False
+
+
+@njit(inline="always")
+def defect_error(h, f_end, k1, k2, jac, err):
+    r"""The error of a ROS2 sub-step of h [s] from its defect at the new state, into ``err`` [-]:
+
+    .. math::
+        e_i = \frac{h\,\big(f_i(y_{n+1}, t + h) - b_1'(1)\,k_{1,i} - b_2'(1)\,k_{2,i}\big)}
+                   {1 + \gamma h \max(0, -J_{ii}(y_{n+1}, t + h))}
+
+    ``f_end``: the right-hand side at the new state [1/s]; ``jac``: its Jacobian there (diagonal only used);
+    ``k1``, ``k2``: the sub-step's stages [1/s].  The numerator is the defect of the continuous extension
+    (B1_END, B2_END: its rate at the end against the equation's) over the sub-step [3]; the denominator
+    filters it as the stepper would, one volume at a time, with the stiffness at the new state: a volume that
+    relaxes fast carries its defect as d/(γ|J_ii|), a slow one as h·d.  For a smooth solution the defect is
+    O(h²), so e is O(h³), below the embedded estimate; across a closing port it reads the lag that the start's
+    filter hid.
+    """
+    for i in range(err.shape[0]):
+        d = f_end[i] - B1_END * k1[i] - B2_END * k2[i]
+        err[i] = h * d / (1.0 + _GAMMA * h * max(0.0, -jac[i, i]))
+
