@@ -219,6 +219,45 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes_or_suctio
     assert seen[True] and seen[False] and seen["opened"] and seen["soft"] and seen["sealing"], seen
 
 
+def test_defect_threshold_is_the_smallest_sub_step_over_which_a_closing_port_needs_the_check(warm):
+    """Closed form: at a first stage ``step_control.defect_threshold`` sets the sub-step above which the defect check
+    runs to min over the chambers' suction and delivery ports that close within the horizon H (t_c = A / (−ω dA/dθ)
+    < H) of max(t_c / 2, 1 / (γ |∂Q/∂Δp| β / V)): the area halves within the sub-step and the port holds its chamber
+    stiff on its scale; ∞ where no port closes.  Computed here from the port areas, slopes, pressures and the
+    orifice law apart from the code under test."""
+    from gerotor_twin.hydraulics.orifice import port_orifice_flow
+    from gerotor_twin.model.params import CT_DEFECT_H
+    m, inp, s = warm
+    km = m.kernel
+    pc = km.pc
+    op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
+    ws, n = m._ws, m.N
+    horizon = 4.0 * m.step_size(inp.omega)
+    gamma = 1.0 + 1.0 / math.sqrt(2.0)
+    seen = {"finite": 0, "none": 0}
+    for theta in np.linspace(s.theta, s.theta + m.tables.shift, 41):
+        _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])
+        SC.defect_threshold(km, op, ws, horizon)
+        want = math.inf
+        for j in range(n):
+            for a, slope, dp in ((ws.geo[j, F.G_AS], ws.geo[j, F.G_DAS], op.p_s - ws.p[j]),
+                                 (ws.geo[j, F.G_AD], ws.geo[j, F.G_DAD], ws.p[n] - ws.p[j])):
+                if a > 0 and slope < 0 and a / (-slope * op.omega) < horizon:
+                    _q, dq = port_orifice_flow(dp, a, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta,
+                                               pc.density, pc.viscosity)
+                    rate = abs(dq) * ws.beta[j] / ws.geo[j, F.G_V]
+                    want = min(want, max(0.5 * a / (-slope * op.omega), 1.0 / (gamma * rate)))
+        got = ws.ctrl[CT_DEFECT_H]
+        if math.isinf(want):
+            assert math.isinf(got), theta
+            seen["none"] += 1
+        else:
+            assert got == pytest.approx(want, rel=1e-12), theta
+            seen["finite"] += 1
+            assert SC.port_filtered(ws, 1.01 * got) and not SC.port_filtered(ws, 0.99 * got)
+    assert seen["finite"] and seen["none"], seen
+
+
 @pytest.fixture(scope="module")
 def warm_paper(cfg):
     """As ``warm`` with the paper's fluid model (eq. (23))."""

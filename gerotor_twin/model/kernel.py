@@ -68,8 +68,8 @@ from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      ERROR_PRESSURE, FL_DELIVERY)
-from .step_control import (defect_error, embedded_error, error_norm, error_weights, port_filtered, step_factor,
-                           update_range)
+from .step_control import (defect_error, defect_threshold, embedded_error, error_norm, error_weights, port_filtered,
+                           step_factor, update_range)
 from .tooth_constraint import pull_back_along
 from .volumes import move_volumes
 
@@ -187,6 +187,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     error_weights(km, op, ws, CLOSING_HORIZON * big_h)
+    defect_threshold(km, op, ws, CLOSING_HORIZON * big_h)
     h = ws.ctrl[CT_PENDING]
     if h > 0.0:
         _track_peak(y, h, km.pc.n, ws)
@@ -279,7 +280,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
-        check = pc.error_measure == ERROR_PRESSURE and port_filtered(km, op, ws, h)   # before the stages: ws.jac
+        check = pc.error_measure == ERROR_PRESSURE and port_filtered(ws, h)
         en = ros2_step(y, th, h, km, op, ws)
         if en <= 1.0 or h <= h_min:
             finite = True

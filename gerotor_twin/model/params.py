@@ -34,7 +34,8 @@ from ..hydraulics.state_equation import StateEquation, port_states, state_equati
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
            "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE",
-           "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND"]
+           "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND",
+           "CT_DEFECT_H", "N_CTRL"]
 
 #: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
 #: delivered (net out of the delivery port, after the line leakages) [m³/s], in through the
@@ -50,8 +51,10 @@ ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 
 #: ``Workspace.ctrl`` entries: the proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ); the
 #: pending sub-step [s]; how many ports close within the horizon; the chamber pressures' recent range [Pa]; why
-#: the last output step was abandoned; the sub-step attempts an output step may take (see ``Workspace.ctrl``)
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND = range(7)
+#: the last output step was abandoned; the sub-step attempts an output step may take; the sub-step [s] above which
+#: the defect check runs (``step_control.defect_threshold``) (see ``Workspace.ctrl``)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H = range(8)
+N_CTRL = 8
 
 
 #: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
@@ -148,12 +151,13 @@ class Workspace(NamedTuple):
     pres: np.ndarray        #: (N+1,) pressures after an output step [Pa]
     flows: np.ndarray       #: (N_FLOWS,) flows of the last RHS [m³/s]
     flows_prev: np.ndarray  #: (N_FLOWS,) flows at the first stage of the current sub-step [m³/s]
-    ctrl: np.ndarray        #: (7,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
+    ctrl: np.ndarray        #: (N_CTRL,) proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ);
                             #: length of the accepted sub-step whose flow integral is pending [s];
                             #: how many ports close within the horizon there (flows.closing_ports);
                             #: the chamber pressures' recent range, the error scale's (step_control.update_range) [Pa];
                             #: why the last output step was abandoned (kernel.STEP_*);
-                            #: the sub-step attempts an output step may take (numerics.max_substep_attempts)
+                            #: the sub-step attempts an output step may take (numerics.max_substep_attempts);
+                            #: the sub-step above which the defect check runs (step_control.defect_threshold) [s]
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`), set from the state at each
                             #: ``advance`` (``PumpState.eccentricity``, ``squeeze_velocity``) and returned in it
@@ -239,6 +243,6 @@ def workspace(n: int) -> Workspace:
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
-                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(7),
+                     pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(N_CTRL),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
                      gear_rows=np.zeros((n, N_ROWS)))

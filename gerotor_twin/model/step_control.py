@@ -38,11 +38,12 @@ import math
 
 from .._jit import njit
 from ..hydraulics.orifice import port_orifice_flow
-from .flows import G_AD, G_AS, G_DAD, G_DAS, G_V, J_TCD, J_TCS, time_to_close
-from .params import CT_RANGE, ERROR_PRESSURE
+from .flows import G_AD, G_AS, G_DAD, G_DAS, G_V, time_to_close
+from .params import CT_DEFECT_H, CT_RANGE, ERROR_PRESSURE
 
 __all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "OPENED_WINDOW", "error_scale", "update_range", "port_event",
-           "error_weights", "embedded_error", "error_norm", "step_factor", "port_filtered", "defect_error",
+           "error_weights", "embedded_error", "error_norm", "step_factor", "defect_threshold", "port_filtered",
+           "defect_error",
            "B1_END", "B2_END"]
 
 SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
@@ -165,40 +166,49 @@ def step_factor(en):
 
 
 @njit(inline="always")
-def _port_stiff(pc, dp, area, beta, volume, gh):
-    """True if a port of open ``area`` [m²] at the pressure difference ``dp`` [Pa] across it makes its chamber
-    (bulk modulus ``beta`` [Pa], ``volume`` [m³]) stiff on the scale γh = ``gh`` [s]: γh·|∂Q/∂Δp|·β/V > 1."""
+def _filter_threshold(pc, omega, dp, area, slope, beta, volume, horizon):
+    r"""The smallest sub-step [s] over which one port needs the defect check, or ∞: a port of open ``area`` [m²]
+    falling at ``slope`` [m²/rad] closes in t_c (:func:`.flows.time_to_close`, within ``horizon`` [s]), so its area
+    halves within a sub-step of h > t_c/2; its conductance holds its chamber (bulk modulus ``beta`` [Pa],
+    ``volume`` [m³]) stiff on the scale of h where γh·|∂Q/∂Δp|·β/V > 1, ``dp`` [Pa] the difference across it."""
+    tc = time_to_close(area, slope, omega, horizon)
+    if tc <= 0.0:
+        return math.inf
     _q, dq = port_orifice_flow(dp, area, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta, pc.density,
                                pc.viscosity)                                # Eq. (21)
-    return gh * abs(dq) * beta / volume > 1.0
+    rate = abs(dq) * beta / volume
+    return max(0.5 * tc, 1.0 / (_GAMMA * rate)) if rate > 0.0 else math.inf
 
 
 @njit(inline="always")
-def port_filtered(km, op, ws, h):
-    r"""True if the sub-step of h [s] about to be taken needs the defect check (:func:`defect_error`): a port whose
-    open area halves within it (its time to close, :func:`.flows.closing_ports` in the Jacobian's columns, below
-    2h) holds its chamber stiff at the start, :math:`\gamma h\,|\partial Q/\partial\Delta p|\,\beta/V > 1`.
+def defect_threshold(km, op, ws, horizon):
+    r"""At the first stage of a sub-step: into ``ws.ctrl[CT_DEFECT_H]`` the sub-step [s] above which the step needs
+    the defect check (:func:`port_filtered`): the smallest over the chambers' suction and delivery ports of
+    :func:`_filter_threshold`, from the first stage's pressures, bulk moduli and port geometry in ``ws``.
 
     The embedded estimate filters both of its solutions by W = I − γhJ of the start, where that port's
     conductance dominates the chamber's row; as the area falls the chamber's quasi-equilibrium moves like
-    1/A², which the filtered stages do not see (docs/numerics.md, "Closing ports").  From the pressures, bulk
-    moduli and geometry in ``ws``: the first stage's, or after a rejected sub-step its second stage's (a gate
-    only; the times to close are the first stage's).
+    1/A², which the filtered stages do not see (docs/numerics.md, "The defect check across a closing port").
+    ``horizon`` [s]: how far ahead a closing port counts (the closing horizon of :func:`error_weights`).
     """
     pc = km.pc
     n = pc.n
-    n1 = n + 1
-    gh = _GAMMA * h
+    h_check = math.inf
     for j in range(n):
-        tcs = ws.jac[j, n1 + J_TCS]
-        if 0.0 < tcs < 2.0 * h and _port_stiff(pc, op.p_s - ws.p[j], ws.geo[j, G_AS], ws.beta[j], ws.geo[j, G_V],
-                                              gh):
-            return True
-        tcd = ws.jac[j, n1 + J_TCD]
-        if 0.0 < tcd < 2.0 * h and _port_stiff(pc, ws.p[n] - ws.p[j], ws.geo[j, G_AD], ws.beta[j], ws.geo[j, G_V],
-                                              gh):
-            return True
-    return False
+        v = ws.geo[j, G_V]
+        h_check = min(h_check,
+                      _filter_threshold(pc, op.omega, op.p_s - ws.p[j], ws.geo[j, G_AS], ws.geo[j, G_DAS],
+                                        ws.beta[j], v, horizon),
+                      _filter_threshold(pc, op.omega, ws.p[n] - ws.p[j], ws.geo[j, G_AD], ws.geo[j, G_DAD],
+                                        ws.beta[j], v, horizon))
+    ws.ctrl[CT_DEFECT_H] = h_check
+
+
+@njit(inline="always")
+def port_filtered(ws, h):
+    """True if the sub-step of h [s] about to be taken needs the defect check (:func:`defect_error`): a port's area
+    halves within it while the port holds its chamber stiff on its scale (:func:`defect_threshold`)."""
+    return h > ws.ctrl[CT_DEFECT_H]
 
 
 @njit(inline="always")
