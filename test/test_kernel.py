@@ -221,10 +221,10 @@ def test_error_weights_tighter_on_a_chamber_whose_delivery_port_closes_or_suctio
 
 def test_defect_threshold_is_the_smallest_sub_step_over_which_a_closing_port_needs_the_check(warm):
     """Closed form: at a first stage ``step_control.defect_threshold`` sets the sub-step above which the defect check
-    runs to min over the chambers' suction and delivery ports that close within the horizon H (t_c = A / (−ω dA/dθ)
-    < H) of max(t_c / 2, 1 / (γ |∂Q/∂Δp| β / V)): the area halves within the sub-step and the port holds its chamber
-    stiff on its scale; ∞ where no port closes.  Computed here from the port areas, slopes, pressures and the
-    orifice law apart from the code under test."""
+    runs to min over the chambers' suction and delivery ports that close within two output steps H (t_c = A /
+    (−ω dA/dθ) < 2H; no sub-step is longer than H) of max(t_c / 2, 1 / (γ |∂Q/∂Δp| β / V)): the area halves within
+    the sub-step and the port holds its chamber stiff on its scale; ∞ where no port closes so soon.  Computed here
+    from the port areas, slopes, pressures and the orifice law apart from the code under test."""
     from gerotor_twin.hydraulics.orifice import port_orifice_flow
     from gerotor_twin.model.params import CT_DEFECT_H
     m, inp, s = warm
@@ -232,17 +232,17 @@ def test_defect_threshold_is_the_smallest_sub_step_over_which_a_closing_port_nee
     pc = km.pc
     op = operating(km, inp.omega, inp.p_suction, inp.p_delivery)
     ws, n = m._ws, m.N
-    horizon = 4.0 * m.step_size(inp.omega)
+    big_h = m.step_size(inp.omega)
     gamma = 1.0 + 1.0 / math.sqrt(2.0)
     seen = {"finite": 0, "none": 0}
     for theta in np.linspace(s.theta, s.theta + m.tables.shift, 41):
         _rhs(m, op, s.log_density, theta, m.gaps(theta, s.eccentricity)[0])
-        SC.defect_threshold(km, op, ws, horizon)
+        SC.defect_threshold(km, op, ws, big_h)
         want = math.inf
         for j in range(n):
             for a, slope, dp in ((ws.geo[j, F.G_AS], ws.geo[j, F.G_DAS], op.p_s - ws.p[j]),
                                  (ws.geo[j, F.G_AD], ws.geo[j, F.G_DAD], ws.p[n] - ws.p[j])):
-                if a > 0 and slope < 0 and a / (-slope * op.omega) < horizon:
+                if a > 0 and slope < 0 and a / (-slope * op.omega) < 2.0 * big_h:
                     _q, dq = port_orifice_flow(dp, a, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta,
                                                pc.density, pc.viscosity)
                     rate = abs(dq) * ws.beta[j] / ws.geo[j, F.G_V]

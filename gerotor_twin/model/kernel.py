@@ -187,7 +187,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     error_weights(km, op, ws, CLOSING_HORIZON * big_h)
-    defect_threshold(km, op, ws, CLOSING_HORIZON * big_h)
+    defect_threshold(km, op, ws, big_h)
     h = ws.ctrl[CT_PENDING]
     if h > 0.0:
         _track_peak(y, h, km.pc.n, ws)

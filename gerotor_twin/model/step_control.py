@@ -166,12 +166,13 @@ def step_factor(en):
 
 
 @njit(inline="always")
-def _filter_threshold(pc, omega, dp, area, slope, beta, volume, horizon):
+def _filter_threshold(pc, omega, dp, area, slope, beta, volume, big_h):
     r"""The smallest sub-step [s] over which one port needs the defect check, or ∞: a port of open ``area`` [m²]
-    falling at ``slope`` [m²/rad] closes in t_c (:func:`.flows.time_to_close`, within ``horizon`` [s]), so its area
-    halves within a sub-step of h > t_c/2; its conductance holds its chamber (bulk modulus ``beta`` [Pa],
-    ``volume`` [m³]) stiff on the scale of h where γh·|∂Q/∂Δp|·β/V > 1, ``dp`` [Pa] the difference across it."""
-    tc = time_to_close(area, slope, omega, horizon)
+    falling at ``slope`` [m²/rad] closes in t_c (:func:`.flows.time_to_close`), so its area halves within a
+    sub-step of h > t_c/2; its conductance holds its chamber (bulk modulus ``beta`` [Pa], ``volume`` [m³]) stiff on
+    the scale of h where γh·|∂Q/∂Δp|·β/V > 1, ``dp`` [Pa] the difference across it.  ∞ where t_c ≥ 2·``big_h``:
+    no sub-step is longer than the output step ``big_h`` [s] (and the orifice law is not evaluated)."""
+    tc = time_to_close(area, slope, omega, 2.0 * big_h)
     if tc <= 0.0:
         return math.inf
     _q, dq = port_orifice_flow(dp, area, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta, pc.density,
@@ -181,15 +182,15 @@ def _filter_threshold(pc, omega, dp, area, slope, beta, volume, horizon):
 
 
 @njit(inline="always")
-def defect_threshold(km, op, ws, horizon):
+def defect_threshold(km, op, ws, big_h):
     r"""At the first stage of a sub-step: into ``ws.ctrl[CT_DEFECT_H]`` the sub-step [s] above which the step needs
     the defect check (:func:`port_filtered`): the smallest over the chambers' suction and delivery ports of
-    :func:`_filter_threshold`, from the first stage's pressures, bulk moduli and port geometry in ``ws``.
+    :func:`_filter_threshold`, from the first stage's pressures, bulk moduli and port geometry in ``ws``; ``big_h``
+    [s]: the output step, the longest sub-step.
 
     The embedded estimate filters both of its solutions by W = I − γhJ of the start, where that port's
     conductance dominates the chamber's row; as the area falls the chamber's quasi-equilibrium moves like
     1/A², which the filtered stages do not see (docs/numerics.md, "The defect check across a closing port").
-    ``horizon`` [s]: how far ahead a closing port counts (the closing horizon of :func:`error_weights`).
     """
     pc = km.pc
     n = pc.n
@@ -198,9 +199,9 @@ def defect_threshold(km, op, ws, horizon):
         v = ws.geo[j, G_V]
         h_check = min(h_check,
                       _filter_threshold(pc, op.omega, op.p_s - ws.p[j], ws.geo[j, G_AS], ws.geo[j, G_DAS],
-                                        ws.beta[j], v, horizon),
+                                        ws.beta[j], v, big_h),
                       _filter_threshold(pc, op.omega, ws.p[n] - ws.p[j], ws.geo[j, G_AD], ws.geo[j, G_DAD],
-                                        ws.beta[j], v, horizon))
+                                        ws.beta[j], v, big_h))
     ws.ctrl[CT_DEFECT_H] = h_check
 
 
