@@ -212,3 +212,21 @@ def test_the_tooth_constraint_leaves_the_check_nothing_to_take_back(cfg, pump, r
             moved.append(h * math.hypot(m._ws.disp[2], m._ws.disp[3]))   # the check's remainder (volumes.py)
         rem[scheme] = np.median(moved)
     assert rem["stages"] > 1e-6 and rem["constrained"] < 1e-9, rem
+
+
+@pytest.mark.parametrize("pump, rpm, bar", [("07_default_gear_set_new", 1650.0, 27.5), ("default", 3000.0, 27.5)])
+def test_the_constrained_twin_is_within_the_budget_of_its_reference(cfg, pump, rpm, bar):
+    """Behaviour against a fresh tight reference of the same scheme (``gear_coupling: constrained``), a tight pump and
+    a loose one: 07 (new-pump clearances, the gear on its teeth; with ``stages`` its peak is −17.7 % there) and the
+    default pump at its rated point, where the defect check across a closing port (step_control) brought the
+    constrained twin's peak from +3.35 % to +1.88 %.  Every figure of the budget holds (measured 2026-12-05: 07 peak
+    −1.64 %, RMS 0.25 % of the range; default +1.88 %, 0.11 %).  The full family is a benchmark
+    (docs/numerics.md, "The tooth contact as a constraint")."""
+    base = cfg if pump == "default" else load_config(family_dir() / f"{pump}.yaml")
+    c = replace(base, numerics=replace(base.numerics, gear_coupling="constrained"))
+    ref = reference_revolution(c, rpm, bar, "mobility")
+    res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
+    err = compare(Revolution.of(res), ref, c.boundary.suction_pressure_pa, c.fluid.atmospheric_pa + bar * 1e5,
+                  c.fluid.atmospheric_pa)
+    for key, bound in BUDGET.items():
+        assert abs(err[key]) <= bound, (key, err[key])
