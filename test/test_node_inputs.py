@@ -203,3 +203,23 @@ def test_wrong_type_text():
     assert wrong_type_text("/bench/shaft_speed", js, [(js, "/bench"), (f64, "/a"), (f64, "/b")]) == (
         "bench/shaft_speed is published as std_msgs/msg/Float64 by /a, /b; expected sensor_msgs/msg/JointState "
         "(its messages never reach the node)")
+
+
+def test_a_wrong_type_publisher_is_said_once_and_by_its_name():
+    """Behaviour (``node.say_once``): DDS discovers a publisher before its node's name, and rmw names it
+    ``_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_`` meanwhile: the console line waits for the name (up to
+    ``NAME_GRACE_S``), is said once per publisher (topic and endpoint gids), not again when the name resolves, and
+    is said after the grace for a writer whose node is never named."""
+    from gerotor_twin.ros.node import NAME_GRACE_S, say_once
+    seen, said = {}, set()
+    key = ("/bench/shaft_speed", frozenset({b"\x01" * 16}))
+    unknown = "bench/shaft_speed is published as std_msgs/msg/Float64 by _NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_"
+    named = "bench/shaft_speed is published as std_msgs/msg/Float64 by /wrong_bench"
+    assert not say_once(seen, said, key, unknown, 10.0)
+    assert not say_once(seen, said, key, unknown, 10.0 + 0.5 * NAME_GRACE_S)
+    assert say_once(seen, said, key, named, 10.0 + 0.6 * NAME_GRACE_S)
+    assert not say_once(seen, said, key, named, 20.0)
+    other = ("/bench/shaft_speed", frozenset({b"\x02" * 16}))
+    assert not say_once(seen, said, other, unknown, 30.0)
+    assert say_once(seen, said, other, unknown, 30.0 + NAME_GRACE_S)
+    assert not say_once(seen, said, other, unknown, 40.0)

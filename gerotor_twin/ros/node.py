@@ -219,7 +219,8 @@ class TwinNode(Node):
             raise InputError("GEROTOR_TWIN_INPUT_NODE", "0", "1 with GEROTOR_TWIN_EXECUTOR=waitset")
         self.received = dict.fromkeys(INPUTS, 0)
         self.log_refused = dict.fromkeys(INPUTS, 0)      # write_raw raised: received, not logged
-        self._wrong_type_said: set[str] = set()          # wrong-type publishers already logged
+        self._wrong_type_said: set = set()               # wrong-type publishers already logged (topic, gids)
+        self._wrong_type_seen: dict = {}                 # ... and when first seen [s, monotonic]
         self.drain_batch = int(os.environ.get("GEROTOR_TWIN_DRAIN_BATCH", "256"))
         self.count_losses = self.executor_kind != "events"   # sequence numbers from every message, or none
         self.inbox = Inbox((lambda: self.get_clock().now().nanoseconds) if prm["use_sim_time"] else time.time_ns)
@@ -465,8 +466,8 @@ class TwinNode(Node):
             if text:
                 wrong.append(text)
                 values[f"wrong_type_publishers.{kind}"] = text
-                if text not in self._wrong_type_said:
-                    self._wrong_type_said.add(text)
+                key = (sub.topic_name, frozenset(bytes(i.endpoint_gid) for i in infos if i.topic_type != expected))
+                if say_once(self._wrong_type_seen, self._wrong_type_said, key, text, time.monotonic()):
                     self.get_logger().warning(text)
         return many, wrong
 
@@ -493,6 +494,26 @@ class TwinNode(Node):
                     {k: s.topic_name for k, s in self.subs.items()}, self.inbox.dropped))
             st = log.close(timeout_s=30.0)
             self.get_logger().info(f"MCAP log closed: {st.written} messages written, {st.dropped} dropped")
+
+
+#: rmw's names of a graph endpoint whose node is not discovered yet (rmw_dds_common)
+UNKNOWN_NODE_NAMES = ("_NODE_NAME_UNKNOWN_", "_NODE_NAMESPACE_UNKNOWN_")
+#: how long [s] a wrong-type publisher whose node is not discovered yet waits before it is said anyway
+NAME_GRACE_S = 3.0
+
+
+def say_once(seen: dict, said: set, key, text: str, now: float, grace_s: float = NAME_GRACE_S) -> bool:
+    """True the one time the publishers ``key`` (a topic and their endpoint gids) are to be said on the console:
+    once ``text`` names their nodes (DDS discovers an endpoint before its node's name: rmw says
+    :data:`UNKNOWN_NODE_NAMES` meanwhile), or ``grace_s`` [s] after ``now`` first saw them (a DDS writer without a
+    ROS node is never named).  ``seen``: first-seen times [s] by key; ``said``: the keys said, both updated."""
+    if key in said:
+        return False
+    first = seen.setdefault(key, now)
+    if any(u in text for u in UNKNOWN_NODE_NAMES) and now - first < grace_s:
+        return False
+    said.add(key)
+    return True
 
 
 def _publisher_name(info) -> str:
