@@ -67,9 +67,9 @@ from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX
                             close_pending, gear_move, linearise, linearise_with, set_constraint)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
-                     ERROR_PRESSURE, FL_DELIVERY)
-from .step_control import (defect_error, defect_threshold, embedded_error, error_norm, error_weights, port_filtered,
-                           step_factor, update_range)
+                     FL_DELIVERY)
+from .step_control import (GAMMA, defect_error, defect_threshold, embedded_error, error_norm, error_weights,
+                           port_filtered, step_factor, update_range)
 from .tooth_constraint import pull_back_along
 from .volumes import move_volumes
 
@@ -90,7 +90,6 @@ STEP_DONE, STEP_NONFINITE, STEP_WORK_BOUND = 0, 1, 2
 # how the outer gear moves in integrate()
 MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
-GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
 #: output steps ahead in which a closing port is treated as closing (its ∂f/∂t share, its tolerance)
 CLOSING_HORIZON = 4.0
@@ -280,7 +279,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
-        check = pc.error_measure == ERROR_PRESSURE and port_filtered(ws, h)
+        check = port_filtered(ws, h)
         en = ros2_step(y, th, h, km, op, ws)
         if en <= 1.0 or h <= h_min:
             finite = True

@@ -43,19 +43,18 @@ from .params import CT_DEFECT_H, CT_RANGE, ERROR_PRESSURE
 
 __all__ = ["SAFETY", "FACTOR_MIN", "FACTOR_MAX", "OPENED_WINDOW", "error_scale", "update_range", "port_event",
            "error_weights", "embedded_error", "error_norm", "step_factor", "defect_threshold", "port_filtered",
-           "defect_error",
-           "B1_END", "B2_END"]
+           "defect_error", "GAMMA", "B1_END", "B2_END"]
 
 SAFETY = 0.9        #: on the factor that would put the next error norm at exactly 1 [1, eq. (4.13)]
 FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
 FACTOR_MAX = 4.0    #: largest factor per sub-step [-]
 _TINY_NORM = 1e-8   #: below this the error norm says nothing about the step: grow by FACTOR_MAX
 OPENED_WINDOW = 0.25  #: a delivery port counts as just opened within this share of the closing horizon [-]
-_GAMMA = 1.0 + 1.0 / math.sqrt(2.0)            #: ROS2's γ [2]
+GAMMA = 1.0 + 1.0 / math.sqrt(2.0)             #: ROS2's γ [2]
 #: ROS2's continuous extension y(t + sh) = y + h(b₁(s)k₁ + b₂(s)k₂), b₂(s) = (s²/2 − γs)/(1 − 2γ), b₁ = s + b₂
 #: ([1] II, IV.7; ``kernel._track_peak``), differentiated at s = 1: its rate at the sub-step's end is
 #: B1_END·k₁ + B2_END·k₂
-B2_END = (1.0 - _GAMMA) / (1.0 - 2.0 * _GAMMA)
+B2_END = (1.0 - GAMMA) / (1.0 - 2.0 * GAMMA)
 B1_END = 1.0 + B2_END
 
 
@@ -178,7 +177,7 @@ def _filter_threshold(pc, omega, dp, area, slope, beta, volume, big_h):
     _q, dq = port_orifice_flow(dp, area, pc.orifice_law, pc.cd_max, pc.lambda_crit, pc.laminar_delta, pc.density,
                                pc.viscosity)                                # Eq. (21)
     rate = abs(dq) * beta / volume
-    return max(0.5 * tc, 1.0 / (_GAMMA * rate)) if rate > 0.0 else math.inf
+    return max(0.5 * tc, 1.0 / (GAMMA * rate)) if rate > 0.0 else math.inf
 
 
 @njit(inline="always")
@@ -186,7 +185,8 @@ def defect_threshold(km, op, ws, big_h):
     r"""At the first stage of a sub-step: into ``ws.ctrl[CT_DEFECT_H]`` the sub-step [s] above which the step needs
     the defect check (:func:`port_filtered`): the smallest over the chambers' suction and delivery ports of
     :func:`_filter_threshold`, from the first stage's pressures, bulk moduli and port geometry in ``ws``; ``big_h``
-    [s]: the output step, the longest sub-step.
+    [s]: the output step, the longest sub-step.  ∞ with the log-density measure (the references): its
+    tolerance resolves the closing ports by itself.
 
     The embedded estimate filters both of its solutions by W = I − γhJ of the start, where that port's
     conductance dominates the chamber's row; as the area falls the chamber's quasi-equilibrium moves like
@@ -195,7 +195,7 @@ def defect_threshold(km, op, ws, big_h):
     pc = km.pc
     n = pc.n
     h_check = math.inf
-    for j in range(n):
+    for j in range(n if pc.error_measure == ERROR_PRESSURE else 0):
         v = ws.geo[j, G_V]
         h_check = min(h_check,
                       _filter_threshold(pc, op.omega, op.p_s - ws.p[j], ws.geo[j, G_AS], ws.geo[j, G_DAS],
@@ -230,5 +230,5 @@ def defect_error(h, f_end, k1, k2, jac, err):
     """
     for i in range(err.shape[0]):
         d = f_end[i] - B1_END * k1[i] - B2_END * k2[i]
-        err[i] = h * d / (1.0 + _GAMMA * h * max(0.0, -jac[i, i]))
+        err[i] = h * d / (1.0 + GAMMA * h * max(0.0, -jac[i, i]))
 
