@@ -36,15 +36,20 @@ def default_config_path() -> Path:
 
 @dataclass(frozen=True)
 class Clearances:
-    """Clearances [m]: tooth tip δ, lateral (per face), outer gear–housing radial c."""
+    """Clearances [m]: tooth tip δ, lateral (per face), outer gear–housing radial c; and the lateral gap's
+    opening with pressure [m/Pa] (:func:`gerotor_twin.model.params.lateral_gap`)."""
     tooth_tip_m: float
     lateral_m: float
     housing_radial_m: float
+    #: opening of each lateral gap per unit of delivery − suction pressure, ds/dΔp [m/Pa] (the plates' and
+    #: housing's elastic deflection; 1e-11 m/Pa = 1 µm per bar; 0: rigid)
+    lateral_opening_m_per_pa: float = 0.0
 
     def __post_init__(self):
         check_range("clearances.tooth_tip_m", self.tooth_tip_m, 0.0, 5e-4, hi_open=True, unit="m")
         check_range("clearances.lateral_m", self.lateral_m, 0.0, 5e-4, hi_open=True, unit="m")
         check_range("clearances.housing_radial_m", self.housing_radial_m, 0.0, 1e-3, lo_open=True, unit="m")
+        check_range("clearances.lateral_opening_m_per_pa", self.lateral_opening_m_per_pa, 0.0, 1e-9, unit="m/Pa")
 
 
 @dataclass(frozen=True)
@@ -349,8 +354,9 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     gk = {"chambers", "eccentricity_m", "lobe_centre_radius_m", "lobe_radius_m", "outer_root_radius_m",
           "outer_radius_m", "inner_hole_radius_m", "width_m"}
     gs = _section(raw, "gears", gk)
-    cs = _section(raw, "clearances", {"tooth_tip_m", "lateral_m", "housing_radial_m"})
-    clear = Clearances(*(_num(cs, "clearances", k) for k in ("tooth_tip_m", "lateral_m", "housing_radial_m")))
+    cs = _section(raw, "clearances", {"tooth_tip_m", "lateral_m", "housing_radial_m", "lateral_opening_m_per_pa"})
+    clear = Clearances(*(_num(cs, "clearances", k) for k in ("tooth_tip_m", "lateral_m", "housing_radial_m")),
+                       _num(cs, "clearances", "lateral_opening_m_per_pa", 0.0))
     chambers = _num(gs, "gears", "chambers")
     gears = GerotorGeometry(
         chambers=int(chambers) if float(chambers).is_integer() else chambers,

@@ -12,6 +12,9 @@ name       config field                  what it scales
 =========  ============================  ===========================================
 tip        clearances.tooth_tip_m        tooth-tip leakage (≈ δ³ Poiseuille + Couette)
 lateral    clearances.lateral_m          lateral, suction–delivery and drain leakage (≈ s³)
+lateral_   clearances.lateral_opening_   the lateral gap opening with the pressure load,
+opening    m_per_pa                      s₀ + c·Δp: leakage ∝ Δp(1 + cΔp/s₀)³ (fitted
+                                         linearly, step 1e-11 m/Pa = 1 µm/bar)
 cd         orifice.cd_max                port orifices (filling at high speed)
 tip_dh     leakage.tip_dh                equivalent length of the tooth-tip gap
 air        mixture.air_fraction          free air at atmospheric pressure: the chambers'
@@ -23,7 +26,7 @@ bypass     volumetric.bypass_area_m2     a turbulent delivery → suction path, 
 =========  ============================  ===========================================
 
 Each starts at its prior, the value of the pump config given (``displacement``: 1, the ideal
-profiles, unless the config says otherwise), and is fitted only when the identifiability
+profiles, ``lateral_opening``: 0, rigid plates, unless the config says otherwise), and is fitted only when the identifiability
 analysis finds the data determine it (:mod:`.identifiability`); otherwise it stays there.
 """
 from __future__ import annotations
@@ -69,6 +72,8 @@ class FitParameter:
 PARAMETERS = {p.name: p for p in (
     FitParameter("tip", "clearances", "tooth_tip_m", 1e-6, 4.9e-4, "m", "tooth-tip clearance δ"),
     FitParameter("lateral", "clearances", "lateral_m", 1e-6, 4.9e-4, "m", "lateral clearance per face"),
+    FitParameter("lateral_opening", "clearances", "lateral_opening_m_per_pa", 0.0, 1e-9, "m/Pa",
+                 "opening of the lateral gap per unit delivery − suction pressure (plates deflecting)", step=1e-11),
     FitParameter("cd", "orifice", "cd_max", 0.1, 1.0, "-", "turbulent discharge coefficient of the ports"),
     FitParameter("tip_dh", "leakage", "tip_dh", 0.01, 10.0, "-", "dh of the tooth-tip gap's equivalent length"),
     FitParameter("air", "mixture", "air_fraction", 1e-6, 0.2, "-",

@@ -9,9 +9,10 @@ n [rev/s], ``Q_th = D n``):
 
 * ``filling``: incomplete filling growing with speed, :math:`ΔQ = 0.05\,(n/n_\max)^2\,Q_{th}`
   (the suction's pressure drop rising as n²);
-* ``deforming_gap``: a laminar path whose gap opens with pressure (plates and housing deflect),
+* ``deforming_gap``: a laminar path of its own whose gap opens with pressure (plates and housing deflect),
   :math:`ΔQ = G\,Δp\,(1 + Δp/p^*)^3 μ_{40}/μ(T)`, G giving 1 % of Q_th at 1000 rpm and 5 bar at 40 °C,
-  p* = 40 bar;
+  p* = 40 bar (the twin's ``clearances.lateral_opening_m_per_pa`` has this form, but on its lateral gaps,
+  whose unloaded leakage is several times G Δp);
 * the twin's own edge terms at known values (``deficit``: k_D = 0.96 and gaps × 1.1; ``bypass``: 0.5 mm²
   at two oil temperatures), as the recoverable reference.
 
@@ -28,7 +29,7 @@ from typing import Callable
 import numpy as np
 
 from ..config import load_config
-from .command import MAP_CANDIDATES, calibrate_records
+from .command import MAP_CANDIDATES, MAP_PARAMS, calibrate_records
 from .map_synth import synthetic_map
 
 __all__ = ["MAPS", "MapCase", "run", "add_parser"]
@@ -61,7 +62,8 @@ MAPS = (
     MapCase("bypass", "bypass 0.5 mm², k_D 0.97, 30 and 60 °C (in the twin)",
             {"displacement_factor": 0.97, "bypass_area_m2": 0.5e-6}, None, 1.0, (30.0, 60.0)),
     MapCase("filling", "filling loss 5 % × (n/n_max)², gaps × 1.1 (not in the twin)", {}, _filling, 1.1),
-    MapCase("deforming_gap", "gap opening with pressure, (1 + Δp/40 bar)³ (not in the twin)", {}, _deforming_gap),
+    MapCase("deforming_gap", "a path of its own whose gap opens with pressure, (1 + Δp/40 bar)³ (the twin's lateral "
+                             "opening has the form on its own gaps)", {}, _deforming_gap),
 )
 
 
@@ -112,7 +114,7 @@ def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
     for case in MAPS:
         if names and case.name not in names:
             continue
-        res = calibrate_records(build(case), [f"{case.name}.csv"], params=("tip", "lateral", "displacement", "bypass"),
+        res = calibrate_records(build(case), [f"{case.name}.csv"], params=MAP_PARAMS,
                                 cv="speed", candidates=MAP_CANDIDATES, jobs=jobs)
         r = _row(case, res)
         rows.append(r)

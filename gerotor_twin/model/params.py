@@ -14,7 +14,8 @@ Three structures, each field named once with its unit, travel together as one
 port pressures and their log-densities) and :class:`Workspace` every scratch
 array of the hot loop, allocated once per model so a step allocates nothing.
 :func:`kernel_model` is the one place where config values become kernel values;
-:func:`at_temperature` re-evaluates the oil-dependent ones at another oil temperature.
+:func:`at_temperature` re-evaluates the oil-dependent ones at another oil temperature, :func:`at_load` the
+lateral conductances at another delivery − suction pressure (a lateral gap that opens with it, :func:`lateral_gap`).
 """
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ from .gear_coupling import N_GEAR, N_ROWS
 from ..hydraulics.state_equation import StateEquation, port_states, state_equation, with_liquid_modulus
 
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
-           "operating", "workspace", "at_temperature", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
+           "operating", "workspace", "at_temperature", "at_load", "lateral_gap", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
            "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE",
            "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND",
            "CT_DEFECT_H", "N_CTRL"]
@@ -166,10 +167,42 @@ class Workspace(NamedTuple):
     gear_rows: np.ndarray   #: (N, N_ROWS) per chamber ∂V/∂e [m³/m] and ∂F/∂p [N/Pa] of the coupled load, their θ-slopes (gear_coupling)
 
 
-def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float) -> tuple[float, float, float]:
-    """Lateral, suction–delivery and drain conductances [m³/(s·Pa)] at viscosity μ [Pa·s]: flows at Δp = 1 Pa,
-    both faces (each ∝ 1/μ)."""
-    h, faces = config.clearances.lateral_m, 2.0
+def lateral_gap(config: PumpConfig, dp_pa: float = 0.0) -> float:
+    r"""Lateral clearance of each gear face under the pressure load, :math:`s = s_0 + c\,\max(Δp, 0)` [m].
+
+    Parameters
+    ----------
+    config : PumpConfig
+        Pump: :math:`s_0` = ``clearances.lateral_m`` [m], :math:`c` = ``clearances.lateral_opening_m_per_pa``
+        [m/Pa].
+    dp_pa : float
+        Delivery minus suction pressure [Pa].
+
+    Notes
+    -----
+    The delivery pressure acting on the side plates and the housing deflects them and opens the lateral gaps
+    (the structural deformation that sets the lateral film, [1]); linear elasticity makes the opening
+    proportional to the load, so the gaps' laminar leakage, ∝ s³, goes as :math:`Δp\,(1 + cΔp/s_0)^3` instead
+    of Δp.  One opening for every lateral path (lobe, suction–delivery ring, drain), the whole face deflecting
+    alike; a negative Δp (suction above delivery) does not close it.  A pressure-compensated plate, pressed
+    closer as Δp rises (c < 0), is not represented.
+
+    References
+    ----------
+    .. [1] Thiagarajan, D., Vacca, A. "Mixed Lubrication Effects in the Lateral Lubricating Interfaces of
+       External Gear Machines: Modelling and Experimental Validation", Energies 10(1), 111, 2017 (the
+       structural deformation of gears and plates under the pressure load sets the lateral film thickness and
+       the leakage through it).
+    """
+    c = config.clearances
+    return c.lateral_m + c.lateral_opening_m_per_pa * max(float(dp_pa), 0.0)
+
+
+def _conductances(config: PumpConfig, lat: LateralGeometry, mu: float, dp_pa: float = 0.0) -> tuple[float, float, float]:
+    """Lateral, suction–delivery and drain conductances [m³/(s·Pa)] at viscosity μ [Pa·s] and delivery − suction
+    pressure Δp [Pa] (:func:`lateral_gap`): flows at a pressure difference of 1 Pa across the path, both faces
+    (each ∝ s³/μ)."""
+    h, faces = lateral_gap(config, dp_pa), 2.0
     g_lat = faces * sector_circumferential_flow(1.0, h, lat.chi_lobe, lat.lobe_r_in, lat.lobe_r_out, mu)[0]
     g_sd = faces * (sector_circumferential_flow(1.0, h, lat.chi1, lat.ring_r_in, lat.ring_r_out, mu)[0]
                     + sector_circumferential_flow(1.0, h, lat.chi2, lat.ring_r_in, lat.ring_r_out, mu)[0])
@@ -208,7 +241,8 @@ def kernel_model(config: PumpConfig, tables: GeometryTables, lateral: LateralGeo
 
 def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry,
                    temperature_k: float | None) -> KernelModel:
-    """``km`` with the oil properties at T [K]: μ, ρ₀, the conductances (∝ 1/μ) and the state equation.
+    """``km`` with the oil properties at T [K]: μ, ρ₀, the conductances (∝ 1/μ; the unloaded gaps: follow with
+    :func:`at_load` for a gap that opens with pressure) and the state equation.
 
     The geometry tables are shared, not rebuilt; cost ≈ 1–3 ms (the state
     equation's table).  The state of a model must be converted with
@@ -219,6 +253,13 @@ def at_temperature(km: KernelModel, config: PumpConfig, lateral: LateralGeometry
     pc = km.pc._replace(density=f.density_kg_m3, viscosity=f.viscosity_pa_s, g_lateral=g_lat,
                         g_suction_delivery=g_sd, g_drain=g_dr)
     return typed(KernelModel(tab=km.tab, pc=pc, eos=with_liquid_modulus(km.eos, f, config.fluid_model, config.air)))
+
+
+def at_load(km: KernelModel, config: PumpConfig, lateral: LateralGeometry, dp_pa: float) -> KernelModel:
+    """``km`` with its lateral, suction–delivery and drain conductances at the gap the delivery − suction
+    pressure ``dp_pa`` [Pa] opens (:func:`lateral_gap`), at ``km``'s viscosity; nothing else changes (≈ µs)."""
+    g_lat, g_sd, g_dr = _conductances(config, lateral, km.pc.viscosity, dp_pa)
+    return typed(km._replace(pc=km.pc._replace(g_lateral=g_lat, g_suction_delivery=g_sd, g_drain=g_dr)))
 
 
 def operating(km: KernelModel, omega: float, p_s: float, p_d: float) -> Operating:

@@ -7,7 +7,9 @@ between calls; the shaft angle is integrated from the speed.  The oil
 properties follow the temperature input outside the hot loop: the kernel's
 μ, ρ₀, conductances and state equation are re-evaluated when the temperature
 has moved by more than :data:`TEMPERATURE_STEP_K` since the last evaluation,
-and the state is converted so that the pressures are continuous.  Everything is SI: rad, rad/s,
+and the state is converted so that the pressures are continuous.  Likewise a lateral gap that opens with
+the pressure load (``clearances.lateral_opening_m_per_pa``): the lateral conductances follow the delivery −
+suction pressure when it has moved the gap by more than :data:`LOAD_GAP_STEP` of itself.  Everything is SI: rad, rad/s,
 Pa (absolute), m, m³/s, s.
 """
 from __future__ import annotations
@@ -28,9 +30,10 @@ from ..compile_events import announce_compilation
 from . import kernel as K
 from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
-from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, at_temperature, kernel_model, operating, workspace
+from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, at_load, at_temperature, kernel_model, operating, workspace
 
-__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "SolverFailure", "BEARING_MODELS", "TEMPERATURE_STEP_K"]
+__all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "SolverFailure", "BEARING_MODELS", "TEMPERATURE_STEP_K",
+           "LOAD_GAP_STEP"]
 
 
 class SolverFailure(FloatingPointError):
@@ -47,6 +50,10 @@ _ABANDONED = {K.STEP_NONFINITE: "a sub-step at the smallest size gave a non-fini
 #: The kernel's oil properties are re-evaluated when the oil temperature has moved by more
 #: than this since the last evaluation [K] (μ of a VG46 oil changes by ≈ 0.2 % over it at 40 °C).
 TEMPERATURE_STEP_K = 0.05
+
+#: The lateral conductances are re-evaluated when the pressure load has moved the lateral gap by more than this
+#: share of its unloaded clearance [-] (the leakage, ∝ s³, by 0.3 %).
+LOAD_GAP_STEP = 1e-3
 
 BEARING_MODELS = MODEL_NAMES      #: the outer-gear models, by name (one list: bearing.registry)
 
@@ -91,6 +98,8 @@ class PumpModel:
         self.kernel = _with_micro_motion(kernel_model(config, self.tables, self.lateral), config, bearing)
         #: oil temperature the kernel's properties are evaluated at [K]
         self.temperature_k = config.reference_temperature_k
+        #: delivery − suction pressure the kernel's lateral gaps are evaluated at [Pa] (:meth:`set_load`)
+        self.load_dp = 0.0
         self._ws = workspace(self.N)
         self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
         self._announced = False                # _first_use
@@ -130,11 +139,31 @@ class PumpModel:
         if self.config.oil is None or abs(t - self.temperature_k) <= TEMPERATURE_STEP_K:
             return log_density
         old = self.kernel.eos
-        self.kernel = at_temperature(self.kernel, self.config, self.lateral, t)
+        self.kernel = self._loaded(at_temperature(self.kernel, self.config, self.lateral, t))
         self.temperature_k = t
         if self._move == K.MOVE_EXTERNAL:
             self._make_bearing(self.kernel.pc.viscosity)
         return None if log_density is None else convert_log_density(log_density, old, self.kernel.eos)
+
+    def set_load(self, dp_pa: float) -> None:
+        """Evaluate the lateral conductances at delivery − suction pressure Δp [Pa] if it moved the gap enough.
+
+        Nothing happens for a rigid pump (``clearances.lateral_opening_m_per_pa`` = 0) or when the gap
+        (:func:`~gerotor_twin.model.params.lateral_gap`) moved by at most :data:`LOAD_GAP_STEP` of the unloaded
+        clearance since the last evaluation; otherwise ≈ 10 µs.  The state is unchanged (no state variable
+        depends on a conductance).
+        """
+        c = self.config.clearances
+        moved = c.lateral_opening_m_per_pa * abs(max(dp_pa, 0.0) - max(self.load_dp, 0.0))
+        if moved > LOAD_GAP_STEP * c.lateral_m:
+            self.load_dp = float(dp_pa)
+            self.kernel = at_load(self.kernel, self.config, self.lateral, self.load_dp)
+
+    def _loaded(self, km):
+        """``km`` with its lateral gaps at :attr:`load_dp` (itself for a rigid pump)."""
+        if self.config.clearances.lateral_opening_m_per_pa == 0.0:
+            return km
+        return at_load(km, self.config, self.lateral, self.load_dp)
 
     def rebuild_kernel(self, config: PumpConfig, tables: GeometryTables) -> None:
         """Take ``config``/``tables`` (e.g. scaled clearances): the kernel as built in ``__init__``
@@ -145,8 +174,8 @@ class PumpModel:
         if config.oil is not None and self.temperature_k != config.reference_temperature_k:
             km = at_temperature(km, config, self.lateral, self.temperature_k)
         housing_changed = config.clearances.housing_radial_m != self.config.clearances.housing_radial_m
-        self.kernel = km
         self.config, self.geometry, self.tables = config, config.gears, tables
+        self.kernel = self._loaded(km)
         if housing_changed and self._move == K.MOVE_EXTERNAL:
             self._make_bearing(km.pc.viscosity)
 
@@ -208,6 +237,8 @@ class PumpModel:
         n = max(1, int(math.ceil(dt / h0 - 1e-9))) if dt > 0 else 0
         h = dt / n if n else 0.0
         y = self.set_temperature(inputs.oil_temperature, state.log_density.copy())
+        p_d = state.pressures[self.N] if self.restriction_mode else inputs.p_delivery   # the delivery line's or imposed
+        self.set_load(p_d - inputs.p_suction)
         e = state.eccentricity.copy()
         counters = state.counters.copy()
         vols = state.volumes.copy()

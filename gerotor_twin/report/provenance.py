@@ -100,9 +100,15 @@ def pump_rows(ctx: ReportContext) -> list[tuple[str, str]]:
     rows.append(("pump (config 1)", f"{c.gears.chambers} chambers, displacement "
                                     f"{ctx.displacement_m3 * 1e6:.3f} cm³/rev, "
                                     f"tooth-tip clearance {c.clearances.tooth_tip_m * 1e6:.2f} µm, lateral "
-                                    f"{c.clearances.lateral_m * 1e6:.2f} µm, housing radial "
+                                    f"{c.clearances.lateral_m * 1e6:.2f} µm{_opening(c)}, housing radial "
                                     f"{c.clearances.housing_radial_m * 1e6:.2f} µm"))
     return rows
+
+
+def _opening(cfg) -> str:
+    """`` opening 2.00 µm/bar`` for a lateral gap that opens with the pressure load, '' for a rigid one."""
+    c = cfg.clearances.lateral_opening_m_per_pa
+    return f" (opening {c * 1e11:.2f} µm/bar)" if c else ""
 
 
 def software_rows(ctx: ReportContext) -> list[tuple[str, str]]:
