@@ -8,6 +8,7 @@ bounded) is a mapping; every key is optional::
     description: free text          # what it emulates and why
     pump:                           # deviations from the nominal pump (``--config``)
       clearance_factors: {tooth_tip: 1.4, lateral: 1.0, housing_radial: 1.0}   # × nominal [-]
+      clearances: {lateral_opening_m_per_pa: 2.0e-11}   # lateral gaps opening with Δp [m/Pa] (2 µm/bar)
       orifice: {law: flow_number, cd_max: 0.62, lambda_crit: 1000, laminar_delta: 0.2}
       mixture: {air_fraction: 8.0e-3}            # free air at atmospheric pressure [-]
       leakage: {tip_dh: 0.15}                    # tooth-tip gap length law h* = h(1 + dh) [-]
@@ -19,8 +20,9 @@ bounded) is a mapping; every key is optional::
       oil_temperature: {bias_c: 0.5, tau_s: 3.0, noise_c: 0.05}
 
 ``pump``: clearance factors multiply the nominal config's ``clearances`` (tooth tip, lateral,
-outer gear–housing); ``orifice``, ``mixture.air_fraction`` and ``leakage.tip_dh`` replace the
-config's values; ``ports.timing_offset_deg`` adds to both kidneys' ``start_deg`` and ``end_deg``
+outer gear–housing); ``clearances.lateral_opening_m_per_pa`` (the plates deflecting,
+:func:`gerotor_twin.model.params.lateral_gap`), ``orifice``, ``mixture.air_fraction`` and ``leakage.tip_dh``
+replace the config's values; ``ports.timing_offset_deg`` adds to both kidneys' ``start_deg`` and ``end_deg``
 (positive: in the direction of the chamber angles, each edge reached later).  A suction kidney
 whose closing edge is cut to the chamber (``closing_edge: chamber``) keeps that edge at the dead
 centre: the config describes it relative to the gear set.  A key left out keeps the nominal value.
@@ -56,6 +58,7 @@ PUMP_FIELDS: dict[str, tuple[str, tuple]] = {
     "clearance_factors.tooth_tip": ("tooth_tip_factor", (0.5, 3.0, "x nominal")),
     "clearance_factors.lateral": ("lateral_factor", (0.5, 3.0, "x nominal")),
     "clearance_factors.housing_radial": ("housing_factor", (0.5, 3.0, "x nominal")),
+    "clearances.lateral_opening_m_per_pa": ("lateral_opening", (0.0, 1e-9, "m/Pa")),
     "orifice.law": ("orifice_law", tuple(ORIFICE_LAWS)),
     "orifice.cd_max": ("cd_max", (0.3, 1.0, "")),
     "orifice.lambda_crit": ("lambda_crit", (10.0, 1.0e5, "")),
@@ -81,7 +84,7 @@ SENSOR_FIELDS: dict[str, tuple[str, tuple]] = {
     "oil_temperature.noise_c": ("temperature_noise_c", (0.0, 5.0, "K")),
 }
 #: Sections of ``pump`` whose keys replace the nominal config's keys of the same section and name.
-_REPLACED_SECTIONS = ("orifice", "mixture", "leakage")
+_REPLACED_SECTIONS = ("clearances", "orifice", "mixture", "leakage")
 _TOP_KEYS = ("name", "description", "pump", "sensors")
 _MAX_DESCRIPTION = 400
 
@@ -96,6 +99,8 @@ class BenchPump:
         What it is called and what it emulates.
     tooth_tip_factor, lateral_factor, housing_factor : float
         Clearances of the emulated pump relative to the nominal config [-].
+    lateral_opening : float or None
+        Opening of the lateral gaps per unit delivery − suction pressure [m/Pa]; None: the nominal config's.
     orifice_law : str or None
         Orifice law at the ports (``merritt`` | ``flow_number``); None: the nominal config's.
     cd_max, lambda_crit, laminar_delta : float or None
@@ -116,6 +121,7 @@ class BenchPump:
     tooth_tip_factor: float = 1.0
     lateral_factor: float = 1.0
     housing_factor: float = 1.0
+    lateral_opening: float | None = None
     orifice_law: str | None = None
     cd_max: float | None = None
     lambda_crit: float | None = None
