@@ -10,6 +10,7 @@ from gerotor_twin.bench_emulator.emulator import emulated_config
 from gerotor_twin.bench_emulator.profiles import Profile, Segment
 from gerotor_twin.bench_emulator.sensors import Encoder, FirstOrderLag
 from gerotor_twin.cli import main
+from gerotor_twin.config import parse_config
 from gerotor_twin.errors import InputError
 from gerotor_twin.io import metadata, read_topics, scalar_series
 
@@ -124,7 +125,8 @@ def test_bad_rate_and_cli_errors(tmp_path, capsys):
 @pytest.mark.parametrize("name", ["bench_map.mcap", "bench_transient.mcap"])
 def test_bundled_bags_match_the_current_pump_config(cfg, name):
     """The shipped recordings were made from today's config/pump.yaml (clearances × the
-    recorded factor): a recalibration or geometry change makes them stale — regenerate
+    recorded factor), their recorded config read as today's parser reads it (a key added since takes its
+    default): a recalibration or geometry change makes them stale — regenerate
     them with the command stored in their metadata (bags/README.md)."""
     import json
     from pathlib import Path
@@ -133,7 +135,7 @@ def test_bundled_bags_match_the_current_pump_config(cfg, name):
 
     meta = metadata(Path(__file__).resolve().parent.parent / "bags" / name)[EMULATOR_METADATA]
     factor = json.loads(meta["spec"])["clearance_factor"]
-    recorded = yaml.safe_load(meta["emulated_pump_config"])
+    recorded = parse_config(yaml.safe_load(meta["emulated_pump_config"])).to_dict()   # a key added since: its default
     expected = emulated_config(cfg, factor).to_dict()
     def flat(d, prefix=""):
         out = {}
