@@ -41,8 +41,10 @@ MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "dis
 
 #: the candidate sets ``--bench`` compares by default (the prior besides): the gaps, the effective displacement
 #: alone and with the gaps (a pump that differs from the twin in form: free air, another port law, tolerances of
-#: the profiles take a share of the flow at every speed that no clearance makes, docs/calibration_health.md)
-BENCH_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"))
+#: the profiles take a share of the flow at every speed that no clearance makes, docs/calibration_health.md),
+#: and the gaps with their opening under pressure (plates that deflect: a leakage growing faster than Δp)
+BENCH_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"),
+                    ("tip", "lateral", "lateral_opening"))
 #: the largest flow meter lag ``--flow-sensor-tau`` accepts [s]
 FLOW_SENSOR_TAU_MAX_S = 60.0
 

@@ -143,8 +143,12 @@ def _jacobian(ev: Evaluator, names, x, records, f0, sig) -> np.ndarray:
 
 def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.1,
         flow_floor: float = MODEL_FLOW_SD_REL,
-        progress=None) -> FitResult:
-    """Fit the identifiable combinations of ``names`` to ``records`` (see module doc)."""
+        progress=None, structure: dict | None = None) -> FitResult:
+    """Fit the identifiable combinations of ``names`` to ``records`` (see module doc).
+
+    ``structure``: the :func:`identifiability.analyse` result of another fit of ``names`` (a cross-validation
+    fold takes the fit on all points'), whose groups and fixed parameters this fit keeps instead of analysing
+    ``records`` itself."""
     if len(records) < 1:
         raise InputError("plateaus", 0, "at least one steady plateau to fit")
     say = progress or (lambda s: None)
@@ -155,8 +159,9 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     if p == 0:          # the prior itself: nothing to fit
         return FitResult((), np.zeros(0), np.zeros((0, 0)), ident.analyse(np.zeros((len(records), 0)), (), rcond),
                          (f_prior - q) / sig, f_prior, f_prior, math.nan, len(records), 0)
-    analysis = ident.analyse(_jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond,
-                             linear=[PARAMETERS[n].step > 0 for n in names])
+    analysis = structure if structure is not None else ident.analyse(
+        _jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond,
+        linear=[PARAMETERS[n].step > 0 for n in names])
     basis = analysis["basis"]
     say(f"  identifiable directions: {len(analysis['kept'])} of {p}")
     cache = {}

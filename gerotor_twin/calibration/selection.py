@@ -131,19 +131,27 @@ def _eta_errors(records, flow_model, displacement_m3: float) -> np.ndarray:
 
 def cross_validate(ev: C.Evaluator, names, records, fold_index, displacement_m3: float, opts: dict,
                    say=lambda s: None) -> tuple[Candidate, C.FitResult]:
-    """Held-out η errors of fitting ``names`` (each fold fitted on the others), and the fit on all points."""
+    """Held-out η errors of fitting ``names`` (each fold fitted on the others), and the fit on all points.
+
+    Every fold fits the directions the fit on all points fits (its groups and its parameters kept at the prior,
+    :func:`.identifiability.analyse` of the Jacobian at the prior over all operating points): the model each
+    fold is judged as is the model the calibration writes.  That analysis looks at the operating points, not at
+    the measured flows, so deciding it before the folds are left out does not leak the held-out values into
+    the fit (the unsupervised screening that may precede cross-validation: Hastie, Tibshirani & Friedman,
+    *The Elements of Statistical Learning*, 2nd ed., sec. 7.10.2); a direction that the points of a fold
+    determine poorly shows as a large held-out error instead of being dropped from that fold alone."""
     names = tuple(names)
+    fr = C.fit(ev, names, records, **opts)
     cv = np.full(len(records), np.nan)
     pv = np.zeros(len(records))
     for held in fold_index:
         out = set(held.tolist())
         train = [r for i, r in enumerate(records) if i not in out]
         test = [records[i] for i in held]
-        fk = C.fit(ev, names, train, **opts)
+        fk = C.fit(ev, names, train, **opts, structure=fr.analysis)
         q = ev.flows(names, [fk.x], test)[0]
         cv[held] = _eta_errors(test, q, displacement_m3)
         pv[held] = P.param_variance(P.eta_gradients(ev, names, fk.x, test, displacement_m3, q), fk.cov_x)
-    fr = C.fit(ev, names, records, **opts)
     cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(fr.analysis["groups"]),
                      pv, P.measurement_variance(records, displacement_m3))
     say(f"  {'+'.join(names) or 'prior'}: fit RMSE {100 * _rmse(cand.fit_errors):.2f} pt, held-out RMSE {100 * cand.cv_rmse:.2f} pt")
