@@ -20,7 +20,7 @@ from gerotor_twin.bench_emulator import BenchSpec, load_bench_pump
 from gerotor_twin.bench_emulator.bench_pump import BenchPump
 from gerotor_twin.calibration import prediction as P
 from gerotor_twin.calibration.bench_steady import SteadyBench, steady_plateaus
-from gerotor_twin.calibration.command import holdout_verdict
+from gerotor_twin.calibration.command import BENCH_CANDIDATES, OPENING_CANDIDATE, holdout_verdict
 from gerotor_twin.calibration.map_synth import write_map
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
@@ -141,12 +141,19 @@ def test_calibrate_refuses_when_fitting_makes_held_out_worse(tmp_path, capsys):
 _RESULTS: dict[tuple, dict] = {}
 
 
+#: the candidate sets offered where ``calibrate --bench``'s default ones are not: the deflecting pump's with the
+#: gaps' opening (``--candidates``)
+OFFERED = {"deflecting_plates": BENCH_CANDIDATES + (OPENING_CANDIDATE,)}
+
+
 def _evaluated(name: str, params=None) -> dict:
-    """``calibrate --bench``'s default candidate sets, or ``params`` as the one set (``--params``)."""
+    """``calibrate --bench``'s default candidate sets (:data:`OFFERED` where given), or ``params`` as the one set
+    (``--params``)."""
     key = (name, params)
     if key not in _RESULTS:
-        case = cov.Case(PUMPS[name], SEEDS[name], held_out=6) if params is None else \
-            cov.Case(PUMPS[name], SEEDS[name], 6, params, None)
+        sets = OFFERED.get(name, BENCH_CANDIDATES)
+        case = cov.Case(PUMPS[name], SEEDS[name], 6, tuple(dict.fromkeys(n for c in sets for n in c)), sets) \
+            if params is None else cov.Case(PUMPS[name], SEEDS[name], 6, params, None)
         _RESULTS[key] = cov.evaluate(case, jobs=2)
     return _RESULTS[key]
 
@@ -161,9 +168,9 @@ def test_bench_pump_never_worse_than_nominal(name):
     are chosen; the aerated pump (nominal clearances, 0.8 % free air, another port Cd) takes a share of the
     flow at every speed, which the effective displacement makes and no clearance does, so it is chosen there;
     the pump whose lateral gaps open under pressure (``deflecting_plates``) leaks faster than Δp, which the gaps
-    with their opening make (every fold fitting the directions the fit on all points fits: with each fold
-    analysing its own six plateaus, one fold kept the opening at its prior and the displacement was chosen,
-    0.56 pt mean, 1.48 at worst) (measured 2026-12-05: 0.61 → 0.06, 1.52 → 0.04, 9.97 → 0.03 and 2.83 → 0.04 pt
+    with their opening make, offered with ``--candidates`` (every fold fitting the directions the fit on all
+    points fits: with each fold analysing its own six plateaus, one fold kept the opening at its prior and the
+    displacement was chosen, 0.56 pt mean, 1.48 at worst) (measured 2026-12-05: 0.61 → 0.06, 1.52 → 0.04, 9.97 → 0.03 and 2.83 → 0.04 pt
     mean; k_D 0.994 on the aerated pump)."""
     r = _evaluated(name)
     assert r["calibrated"] and r["chosen"], r["verdict"]
@@ -200,3 +207,15 @@ def test_prediction_interval_coverage_over_bench_pumps():
                                                                               p["sd_meas_eta"] ** 2)
                   for p in gaps["plateaus"])
     assert no_form < math.ceil(0.9 * gaps["held_out"]), no_form
+
+
+def test_coverage_command_options_refused_in_one_line(capsys):
+    """Bad input: the coverage run's ``--candidates`` names an unknown parameter, or comes with ``--params``:
+    exit 2 with one line naming the option and what is allowed."""
+    for argv, needle in ((["--candidates", "tip,lateral;gap"], "--candidates = 'gap'"),
+                         (["--params", "tip", "--candidates", "tip"], "--candidates = 'tip'")):
+        with pytest.raises(SystemExit) as e:
+            cov.main(argv)
+        assert e.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert needle in err and "allowed" in err, err

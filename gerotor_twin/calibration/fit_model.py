@@ -85,16 +85,16 @@ PARAMETERS = {p.name: p for p in (
 )}
 
 
-def parse_params(text: str) -> tuple[str, ...]:
-    """``"tip,lateral"`` → ``("tip", "lateral")``; InputError naming the unknown one."""
+def parse_params(text: str, option: str = "--params") -> tuple[str, ...]:
+    """``"tip,lateral"`` → ``("tip", "lateral")``; InputError naming ``option`` and the unknown one."""
     names = tuple(s.strip() for s in str(text).split(",") if s.strip())
     if not names:
-        raise InputError("--params", text, "a comma-separated list of " + ", ".join(PARAMETERS))
+        raise InputError(option, text, "a comma-separated list of " + ", ".join(PARAMETERS))
     for n in names:
         if n not in PARAMETERS:
-            raise InputError("--params", n, ", ".join(PARAMETERS))
+            raise InputError(option, n, ", ".join(PARAMETERS))
     if len(set(names)) != len(names):
-        raise InputError("--params", text, "each parameter once")
+        raise InputError(option, text, "each parameter once")
     return names
 
 

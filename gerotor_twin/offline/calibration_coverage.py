@@ -45,7 +45,7 @@ from ..bench_emulator.bench_pump import load_bench_pump
 from ..calibration import fit as C
 from ..calibration import prediction as P
 from ..calibration.bench_steady import SteadyBench, steady_plateaus
-from ..calibration.command import BENCH_CANDIDATES, calibrate_records
+from ..calibration.command import BENCH_CANDIDATES, OPENING_CANDIDATE, calibrate_records
 from ..calibration.fit_model import parse_params
 from ..config import load_config
 from ..errors import InputError, check_range
@@ -217,6 +217,10 @@ def main(argv=None) -> int:
     p.add_argument("--params", default=None,
                    help="one parameter set to fit or keep nominal, as `calibrate --bench --params` (default: "
                         "calibrate --bench's candidate sets, " + "; ".join(",".join(c) for c in BENCH_CANDIDATES) + ")")
+    p.add_argument("--candidates", default=None,
+                   help="parameter sets to choose among, semicolon-separated, as `calibrate --candidates` (e.g. "
+                        "the default sets and the gaps with their opening: \"" +
+                        ";".join(",".join(c) for c in BENCH_CANDIDATES + (OPENING_CANDIDATE,)) + "\")")
     p.add_argument("--config", default=None, metavar="F",
                    help="the nominal pump the bench pumps derive from (default config/pump.yaml); the operating "
                         "points are scaled to its range")
@@ -237,10 +241,14 @@ def main(argv=None) -> int:
             raise InputError("--seeds", args.seeds, "comma-separated integers")
         check_range("--held-out", args.held_out, 1, 1000)
         params = None if args.params is None else parse_params(args.params)
+        if args.params is not None and args.candidates is not None:
+            raise InputError("--candidates", args.candidates, "not with --params (one set)")
+        sets = None if args.candidates is None else tuple(parse_params(c, "--candidates") for c in args.candidates.split(";")
+                                                          if c.strip())
+    except InputError as e:                  # before ValueError, which it derives from
+        p.error(str(e))
     except ValueError:
         p.error(f"--seeds = {args.seeds!r} is invalid; allowed: comma-separated integers")
-    except InputError as e:
-        p.error(str(e))
     t0 = time.perf_counter()
     config = None
     if args.config is not None:
@@ -249,8 +257,10 @@ def main(argv=None) -> int:
             config = Path(args.config)
         except InputError as e:
             p.error(str(e))
+    if sets is not None:
+        params = tuple(dict.fromkeys(n for c in sets for n in c))
     cases = [Case(files[n], s, args.held_out, config=config) if params is None else
-             Case(files[n], s, args.held_out, params, None, config) for n in names for s in seeds]
+             Case(files[n], s, args.held_out, params, sets, config) for n in names for s in seeds]
     result = run(cases, args.jobs, bags_dir=None if args.bags is None else Path(args.bags))
     print(f"{len(cases)} cases in {time.perf_counter() - t0:.0f} s")
     if args.json:
