@@ -20,7 +20,7 @@ from gerotor_twin.bench_emulator import BenchSpec, load_bench_pump
 from gerotor_twin.bench_emulator.bench_pump import BenchPump
 from gerotor_twin.calibration import prediction as P
 from gerotor_twin.calibration.bench_steady import SteadyBench, steady_plateaus
-from gerotor_twin.calibration.command import BENCH_CANDIDATES, OPENING_CANDIDATE, holdout_verdict
+from gerotor_twin.calibration.command import BENCH_CANDIDATES, holdout_verdict
 from gerotor_twin.calibration.map_synth import write_map
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
@@ -141,9 +141,8 @@ def test_calibrate_refuses_when_fitting_makes_held_out_worse(tmp_path, capsys):
 _RESULTS: dict[tuple, dict] = {}
 
 
-#: the candidate sets offered where ``calibrate --bench``'s default ones are not: the deflecting pump's with the
-#: gaps' opening (``--candidates``)
-OFFERED = {"deflecting_plates": BENCH_CANDIDATES + (OPENING_CANDIDATE,)}
+#: the candidate sets offered where ``calibrate --bench``'s default ones are not (none today)
+OFFERED: dict = {}
 
 
 def _evaluated(name: str, params=None) -> dict:
@@ -168,8 +167,7 @@ def test_bench_pump_never_worse_than_nominal(name):
     are chosen; the aerated pump (nominal clearances, 0.8 % free air, another port Cd) takes a share of the
     flow at every speed, which the effective displacement makes and no clearance does, so it is chosen there;
     the pump whose lateral gaps open under pressure (``deflecting_plates``) leaks faster than Δp, which the gaps
-    with their opening make, offered with ``--candidates`` (every fold fitting the directions the fit on all
-    points fits: with each fold analysing its own six plateaus, one fold kept the opening at its prior and the
+    with their opening make (every fold fitting the directions the fit on all points fits: with each fold analysing its own six plateaus, one fold kept the opening at its prior and the
     displacement was chosen, 0.56 pt mean, 1.48 at worst) (measured 2026-12-05: 0.61 → 0.06, 1.52 → 0.04, 9.97 → 0.03 and 2.83 → 0.04 pt
     mean; k_D 0.994 on the aerated pump)."""
     r = _evaluated(name)

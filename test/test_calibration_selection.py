@@ -137,3 +137,25 @@ def test_bench_map_subtracts_its_loss_closed_form():
     plain = synthetic_map(_raw(case), [(got.omega, got.p_delivery_pa, got.oil_temperature_c)])[0]
     qth = load_config().gears.displacement_closed_form() * 25.0
     assert plain.flow_m3s - got.flow_m3s == pytest.approx(0.0125 * qth, rel=1e-12)
+
+
+def test_solve_holds_a_bounded_coordinate_unless_the_data_pull_it_in():
+    """Closed form: linear residuals r = A b − y (unit weights), b₀ free, b₁ ≥ 0 (its prior on the bound, as a
+    bypass area or a gap's opening), y = 0.3 + t·c with c the part of A's second column orthogonal to the first.
+    Held at b₁ = 0 the fit gives b₀ = 0.3 and r = −t·c, so the gradient along b₁ is g = −t‖c‖², its curvature
+    H = ‖a₁‖², and the χ² releasing it would gain g²/H exceeds 1 for t > ‖a₁‖/‖c‖².  t < 0: b₁ stays 0 (the
+    Karush–Kuhn–Tucker point); t at half that threshold: b₁ stays 0; at five times it: the unconstrained
+    least-squares solution (0.3 − 1.5 t, t) (y = 0.3 − 1.5 t + t·a₁, the mean of a₁ being 1.5)."""
+    from gerotor_twin.calibration.fit import _solve
+    a = np.array([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0], [1.0, 3.0]])
+    c = a[:, 1] - a[:, 1].mean()
+    t_min = np.linalg.norm(a[:, 1]) / np.linalg.norm(c) ** 2
+    lo, hi = np.array([-10.0, 0.0]), np.array([10.0, 100.0])
+
+    def run(t):
+        y = 0.3 + t * c
+        return _solve(lambda b: a @ b - y, lambda b, cols=None: a.copy(), lo, hi)[0]
+
+    for t in (-0.2, 0.5 * t_min):
+        assert run(t)[1] == 0.0 and run(t)[0] == pytest.approx(0.3, abs=1e-6)
+    assert run(5 * t_min) == pytest.approx([0.3 - 1.5 * 5 * t_min, 5 * t_min], abs=1e-5)

@@ -41,13 +41,10 @@ MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "dis
 
 #: the candidate sets ``--bench`` compares by default (the prior besides): the gaps, the effective displacement
 #: alone and with the gaps (a pump that differs from the twin in form: free air, another port law, tolerances of
-#: the profiles take a share of the flow at every speed that no clearance makes, docs/calibration_health.md).
-#: The gaps with their opening under pressure (:data:`OPENING_CANDIDATE`) are offered with ``--candidates``: on
-#: ``bags/bench_map.mcap`` they double the calibration's plateau simulations (the opening's fit creeps to its
-#: bound 0 on a rigid pump).
-BENCH_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"))
-#: plates that deflect: a leakage growing faster than Δp (``--candidates`` of ``calibrate --bench``)
-OPENING_CANDIDATE = ("tip", "lateral", "lateral_opening")
+#: the profiles take a share of the flow at every speed that no clearance makes, docs/calibration_health.md),
+#: and the gaps with their opening under pressure (:data:`OPENING_CANDIDATE`)
+OPENING_CANDIDATE = ("tip", "lateral", "lateral_opening")   #: plates that deflect: leakage growing faster than Δp
+BENCH_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"), OPENING_CANDIDATE)
 #: the largest flow meter lag ``--flow-sensor-tau`` accepts [s]
 FLOW_SENSOR_TAU_MAX_S = 60.0
 
@@ -502,8 +499,8 @@ def add_parser(sub) -> None:
                         "the gaps with each of displacement and bypass, all four, the gaps' opening under pressure "
                         "alone, with the displacement and with the gaps; with --map and --params every "
                         "subset of --params up to 3 parameters, their prefixes beyond; with --bench and no --params: "
-                        "tip,lateral;displacement;tip,lateral,displacement (add ';tip,lateral,lateral_opening' for "
-                        "plates that deflect); with --bench --params as one set)")
+                        "tip,lateral;displacement;tip,lateral,displacement;tip,lateral,lateral_opening; with --bench "
+                        "--params as one set)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4,

@@ -45,7 +45,7 @@ from ..bench_emulator.bench_pump import load_bench_pump
 from ..calibration import fit as C
 from ..calibration import prediction as P
 from ..calibration.bench_steady import SteadyBench, steady_plateaus
-from ..calibration.command import BENCH_CANDIDATES, OPENING_CANDIDATE, calibrate_records
+from ..calibration.command import BENCH_CANDIDATES, calibrate_records
 from ..calibration.fit_model import parse_params
 from ..config import load_config
 from ..errors import InputError, check_range
@@ -218,9 +218,8 @@ def main(argv=None) -> int:
                    help="one parameter set to fit or keep nominal, as `calibrate --bench --params` (default: "
                         "calibrate --bench's candidate sets, " + "; ".join(",".join(c) for c in BENCH_CANDIDATES) + ")")
     p.add_argument("--candidates", default=None,
-                   help="parameter sets to choose among, semicolon-separated, as `calibrate --candidates` (e.g. "
-                        "the default sets and the gaps with their opening: \"" +
-                        ";".join(",".join(c) for c in BENCH_CANDIDATES + (OPENING_CANDIDATE,)) + "\")")
+                   help="parameter sets to choose among, semicolon-separated, as `calibrate --candidates` "
+                        "(default: calibrate --bench's, \"" + ";".join(",".join(c) for c in BENCH_CANDIDATES) + "\")")
     p.add_argument("--config", default=None, metavar="F",
                    help="the nominal pump the bench pumps derive from (default config/pump.yaml); the operating "
                         "points are scaled to its range")
