@@ -225,7 +225,7 @@ def _solve(fun, jac, lo, hi) -> tuple[np.ndarray, int]:
     nfev = 0
     if free.any():
         def fun_free(bf):
-            return fun(np.where(free, _put(b, free, bf), b))
+            return fun(_put(b, free, bf))
 
         def jac_free(bf):
             return jac(_put(b, free, bf), free)[:, free]
