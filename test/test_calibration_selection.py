@@ -6,6 +6,7 @@ clearances and a known displacement deficit: the chosen set holds the displaceme
 held-out speed; a map that follows the empirical law and not the twin: the command says the law wins).
 """
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -159,3 +160,14 @@ def test_solve_holds_a_bounded_coordinate_unless_the_data_pull_it_in():
     for t in (-0.2, 0.5 * t_min):
         assert run(t)[1] == 0.0 and run(t)[0] == pytest.approx(0.3, abs=1e-6)
     assert run(5 * t_min) == pytest.approx([0.3 - 1.5 * 5 * t_min, 5 * t_min], abs=1e-5)
+
+
+def test_rcond_option_checked_in_one_line(tmp_path, capsys):
+    """Bad input: ``calibrate --rcond`` outside [0.01, 0.5] is refused before any simulation, in one line naming
+    the option, the value and the range (exit 2, nothing written)."""
+    out = tmp_path / "fitted.yaml"
+    example = Path(__file__).resolve().parents[1] / "config" / "maps" / "example_map.csv"
+    assert main(["calibrate", "--map", str(example), "-o", str(out), "--rcond", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--rcond = 2.0 is invalid; allowed: [0.01, 0.5]" in err[0]
+    assert not out.exists()

@@ -165,3 +165,12 @@ def test_bench_pump_emulates_the_opening():
             for bar in (5, 25)]
     assert lost[0] > 0 and lost[1] > 10 * lost[0]
     assert opened.bench_pump.resolved(load_config(), opened.spec).lateral_opening == 5e-12
+
+
+def test_display_value():
+    """Closed form: an opening of 5.07e-12 m/Pa is shown as 0.507 µm/bar (1 µm/bar = 1e-11 m/Pa), a clearance of
+    34.506e-6 m as 34.506 µm, a unitless factor with four decimals."""
+    from gerotor_twin.calibration.fit_model import display_value
+    assert display_value(5.07e-12, "m/Pa") == "0.507 µm/bar"
+    assert display_value(34.506e-6, "m") == "34.506 µm"
+    assert display_value(0.96, "-") == "0.9600"

@@ -23,7 +23,7 @@ from ..config import load_config, parse_config
 from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
-from .fit_model import apply, parse_params
+from .fit_model import DISPLAY_UNITS, apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
@@ -330,8 +330,6 @@ def fitted_config(result: dict) -> dict:
     return raw
 
 
-#: unit of a fitted parameter → (scale, unit) it is printed in
-DISPLAY_UNITS = {"m": (1e6, "µm"), "m²": (1e6, "mm²")}
 
 
 def print_summary(result: dict, out=None) -> None:
@@ -343,7 +341,7 @@ def print_summary(result: dict, out=None) -> None:
         u, unit = DISPLAY_UNITS.get(p["unit"], (1.0, ""))
         note = ("" if p["identifiable"] else "  (kept at the prior)" if p["name"] in kept
                 else "  (not separately identifiable: common factor of its group)")
-        print(f"  {p['name']:12s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:3s}  parameter 95 % CI "
+        print(f"  {p['name']:15s} {p['prior'] * u:9.3f} → {p['value'] * u:9.3f} {unit:6s}  parameter 95 % CI "
               f"[{p['ci95'][0] * u:.3f}, {p['ci95'][1] * u:.3f}]{note}", file=out)
     for a, b in f["unseparable"]:
         print(f"  the data cannot separate {a} and {b}: fitted their combination, their ratio kept at the prior",
@@ -431,6 +429,8 @@ def cmd_calibrate(args) -> int:
             raise InputError(flag, v, "[0, 600] s")
     if not (math.isfinite(args.flow_floor) and 0 <= args.flow_floor <= 0.1):
         raise InputError("--flow-floor", args.flow_floor, "[0, 0.1] (fraction of the plateau's mean flow)")
+    if not (math.isfinite(args.rcond) and 0.01 <= args.rcond <= 0.5):
+        raise InputError("--rcond", args.rcond, "[0.01, 0.5] (singular-value ratio)")
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     from ..twin.settings import oil_sensor_tau_arg
     det = DetectorSettings(min_s=args.min_plateau_s, settle_s=args.settle_s,
@@ -439,7 +439,7 @@ def cmd_calibrate(args) -> int:
                                                          FLOW_SENSOR_TAU_MAX_S, unit="s"))
     fit_options = {"config_path": args.config, "params": names, "model": args.model, "holdout": args.holdout,
                    "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say, "cv": cv,
-                   "candidates": candidates}
+                   "candidates": candidates, "rcond": args.rcond}
     if args.map:
         try:
             res = calibrate_map(args.map, **fit_options)
@@ -518,6 +518,12 @@ def add_parser(sub) -> None:
     p.add_argument("--flow-floor", type=float, default=C.MODEL_FLOW_SD_REL, metavar="REL",
                    help="model error of a plateau's mean flow, relative, added in quadrature to its standard "
                         f"error (default {C.MODEL_FLOW_SD_REL:g}; 0: noise only)")
+    p.add_argument("--rcond", type=float, default=0.1, metavar="R",
+                   help="identifiability: a parameter direction whose singular value is below R × the largest is "
+                        "not fitted (kept at the prior, or fitted as a common factor with the one it is confused "
+                        "with; default 0.1, for two parameters a correlation above 0.98). Lower it only for data "
+                        "whose form you trust: it compares the directions with one another, not with the noise "
+                        "(docs/calibration_health.md)")
     p.add_argument("--json", metavar="F", help="write the whole result (per plateau, covariance) as JSON")
     p.add_argument("--report", metavar="F.html", help="write a one-page HTML report")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")

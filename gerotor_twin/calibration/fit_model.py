@@ -42,7 +42,7 @@ from ..errors import InputError
 from ..geometry.tables import cached_tables
 from ..units import celsius_to_kelvin, pa_abs_to_bar_gauge, rad_s_to_rpm
 
-__all__ = ["FitParameter", "PARAMETERS", "parse_params", "apply", "PlateauTask", "plateau_flow", "without_edge_losses",
+__all__ = ["FitParameter", "PARAMETERS", "DISPLAY_UNITS", "display_value", "parse_params", "apply", "PlateauTask", "plateau_flow", "without_edge_losses",
            "with_edge_losses"]
 
 
@@ -83,6 +83,18 @@ PARAMETERS = {p.name: p for p in (
     FitParameter("bypass", "volumetric", "bypass_area_m2", 0.0, 1e-4, "m²",
                  "effective area of a turbulent delivery → suction path", step=1e-6),
 )}
+
+
+#: unit of a fitted parameter → (scale, unit) it is shown in (the command's summary, the HTML report)
+DISPLAY_UNITS = {"m": (1e6, "µm"), "m²": (1e6, "mm²"), "m/Pa": (1e11, "µm/bar")}
+
+
+def display_value(v: float, unit: str) -> str:
+    """``v`` [``unit``] as shown to a user: ``"34.506 µm"``, ``"0.507 µm/bar"``, ``"0.9600"`` (unitless)."""
+    if unit in DISPLAY_UNITS:
+        scale, shown = DISPLAY_UNITS[unit]
+        return f"{v * scale:.3f} {shown}"
+    return f"{v:.4f}"
 
 
 def parse_params(text: str, option: str = "--params") -> tuple[str, ...]:

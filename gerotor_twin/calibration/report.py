@@ -11,6 +11,7 @@ import io
 from pathlib import Path
 
 from ..units import m3s_to_lpm
+from .fit_model import display_value
 
 __all__ = ["write_report"]
 
@@ -46,8 +47,7 @@ def _table(head: list[str], rows: list[list]) -> str:
     return f"<table><tr>{h}</tr>{b}</table>"
 
 
-def _scaled(v: float, unit: str) -> str:
-    return {"m": f"{v * 1e6:.3f} µm", "m²": f"{v * 1e6:.4f} mm²"}.get(unit, f"{v:.4f}")
+_scaled = display_value
 
 
 def _verdict(p: dict, f: dict) -> str:
