@@ -20,7 +20,7 @@ from gerotor_twin.bench_emulator import BenchSpec, load_bench_pump
 from gerotor_twin.bench_emulator.bench_pump import BenchPump
 from gerotor_twin.calibration import prediction as P
 from gerotor_twin.calibration.bench_steady import SteadyBench, steady_plateaus
-from gerotor_twin.calibration.command import BENCH_CANDIDATES, holdout_verdict
+from gerotor_twin.calibration.command import holdout_verdict
 from gerotor_twin.calibration.map_synth import write_map
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
@@ -141,18 +141,12 @@ def test_calibrate_refuses_when_fitting_makes_held_out_worse(tmp_path, capsys):
 _RESULTS: dict[tuple, dict] = {}
 
 
-#: the candidate sets offered where ``calibrate --bench``'s default ones are not (none today)
-OFFERED: dict = {}
-
-
 def _evaluated(name: str, params=None) -> dict:
-    """``calibrate --bench``'s default candidate sets (:data:`OFFERED` where given), or ``params`` as the one set
-    (``--params``)."""
+    """``calibrate --bench``'s default candidate sets, or ``params`` as the one set (``--params``)."""
     key = (name, params)
     if key not in _RESULTS:
-        sets = OFFERED.get(name, BENCH_CANDIDATES)
-        case = cov.Case(PUMPS[name], SEEDS[name], 6, tuple(dict.fromkeys(n for c in sets for n in c)), sets) \
-            if params is None else cov.Case(PUMPS[name], SEEDS[name], 6, params, None)
+        case = cov.Case(PUMPS[name], SEEDS[name], held_out=6) if params is None else \
+            cov.Case(PUMPS[name], SEEDS[name], 6, params, None)
         _RESULTS[key] = cov.evaluate(case, jobs=2)
     return _RESULTS[key]
 
