@@ -171,3 +171,23 @@ def test_rcond_option_checked_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--rcond = 2.0 is invalid; allowed: [0.01, 0.5]" in err[0]
     assert not out.exists()
+
+
+def test_selection_table_says_which_parameters_a_set_kept_at_the_prior():
+    """Behaviour: a candidate set whose fit kept a parameter at the prior (the identifiability analysis) is
+    named under the table with that parameter and the ratio used, so that a set equal to a smaller one is not
+    read as a fit of its extra parameter; a set that fitted all of its parameters gets no line."""
+    import io
+    from gerotor_twin.calibration.command import print_selection
+    row = {"fit_rmse": 0.0124, "cv_rmse": 0.0121, "cv_rmse_se": 0.0023, "cv_max_abs": 0.023}
+    sel = {"cv": "speed", "folds": [[0], [1], [2]], "reason": "tip+lateral: lowest held-out RMSE (1.21 pt)",
+           "baseline": {"law": "1 − η = a + b·Δp/n", "fit_rmse": 0.0099, "cv_rmse": 0.0136, "cv_max_abs": 0.03},
+           "baseline_better": False,
+           "candidates": [{"params": ["tip", "lateral"], **row, "held_at_prior": [], "rcond": 0.1},
+                          {"params": ["tip", "lateral", "lateral_opening"], **row,
+                           "held_at_prior": ["lateral_opening"], "rcond": 0.1}]}
+    buf = io.StringIO()
+    print_selection(sel, buf)
+    notes = [ln.strip() for ln in buf.getvalue().splitlines() if "kept at the prior" in ln]
+    assert notes == ["(tip+lateral+lateral_opening: lateral_opening kept at the prior by the identifiability "
+                     "analysis, --rcond 0.1)"]

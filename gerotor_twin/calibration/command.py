@@ -382,6 +382,10 @@ def print_selection(sel: dict, out=None) -> None:
         se = f" ± {100 * c['cv_rmse_se']:.2f}" if "cv_rmse_se" in c else ""
         print(f"    {name:34s} {100 * c['fit_rmse']:9.2f} {100 * c['cv_rmse']:7.2f}{se:>7s} "
               f"{100 * c['cv_max_abs']:13.2f}", file=out)
+    for c in sel["candidates"]:
+        if c.get("held_at_prior"):
+            print(f"    ({'+'.join(c['params'])}: {', '.join(c['held_at_prior'])} kept at the prior by the "
+                  f"identifiability analysis, --rcond {c.get('rcond', 0.1):g})", file=out)
     print(f"  chosen: {sel['reason']}", file=out)
     pi = sel.get("prediction_interval")
     if pi:

@@ -94,6 +94,8 @@ class Candidate:
     directions: int              #: identifiable directions of the fit on all points [-]
     cv_param_var: np.ndarray | None = None   #: each held-out point's gᵀ Σ_x g of its fold's fit [-²] (None: 0)
     cv_meas_var: np.ndarray | None = None    #: each point's measurement variance of η [-²] (None: 0)
+    held: tuple[str, ...] = ()   #: parameters of the set the identifiability analysis kept at the prior
+    rcond: float = math.nan      #: the analysis's singular-value ratio [-]
 
     def model_form(self, level: float = 0.95) -> P.ModelFormError:
         """The model-form error its held-out errors show (:func:`.prediction.model_form_error`)."""
@@ -118,7 +120,7 @@ class Candidate:
                 "cv_rmse": self.cv_rmse, "cv_rmse_se": self.cv_rmse_se,
                 "cv_max_abs": float(np.abs(self.cv_errors).max()),
                 "cv_mean_abs": float(np.mean(np.abs(self.cv_errors))), "cv_errors": self.cv_errors.tolist(),
-                "model_form_sd_eta": self.model_form().sd}
+                "model_form_sd_eta": self.model_form().sd, "held_at_prior": list(self.held), "rcond": self.rcond}
 
 
 def _rmse(e: np.ndarray) -> float:
@@ -152,8 +154,10 @@ def cross_validate(ev: C.Evaluator, names, records, fold_index, displacement_m3:
         q = ev.flows(names, [fk.x], test)[0]
         cv[held] = _eta_errors(test, q, displacement_m3)
         pv[held] = P.param_variance(P.eta_gradients(ev, names, fk.x, test, displacement_m3, q), fk.cov_x)
-    cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(fr.analysis["groups"]),
-                     pv, P.measurement_variance(records, displacement_m3))
+    a = fr.analysis
+    cand = Candidate(names, cv, _eta_errors(records, fr.flow_model, displacement_m3), len(a["groups"]),
+                     pv, P.measurement_variance(records, displacement_m3),
+                     tuple(a.get("fixed", ())) + tuple(a.get("insensitive", ())), float(a.get("rcond", math.nan)))
     say(f"  {'+'.join(names) or 'prior'}: fit RMSE {100 * _rmse(cand.fit_errors):.2f} pt, held-out RMSE {100 * cand.cv_rmse:.2f} pt")
     return cand, fr
 
