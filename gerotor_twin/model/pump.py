@@ -237,8 +237,9 @@ class PumpModel:
         n = max(1, int(math.ceil(dt / h0 - 1e-9))) if dt > 0 else 0
         h = dt / n if n else 0.0
         y = self.set_temperature(inputs.oil_temperature, state.log_density.copy())
-        p_d = state.pressures[self.N] if self.restriction_mode else inputs.p_delivery   # the delivery line's or imposed
-        self.set_load(p_d - inputs.p_suction)
+        if self.config.clearances.lateral_opening_m_per_pa:     # plates that deflect: the gaps follow Δp
+            p_d = state.pressures[self.N] if self.restriction_mode else inputs.p_delivery   # the line's or imposed
+            self.set_load(p_d - inputs.p_suction)
         e = state.eccentricity.copy()
         counters = state.counters.copy()
         vols = state.volumes.copy()
