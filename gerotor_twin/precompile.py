@@ -8,7 +8,8 @@ nothing to it), an oil-temperature change, a zero-length call — so numba compi
 and caches exactly the specialisations a user hits.  The other gear models (Method 1
 ``short``, ``fdm``) add 8 and 5 small specialisations of their own, ≈ 3–5 s each: they
 compile on their first use, announced by one line (:class:`announce_compilation`), and
-are cached from then on; so does ``numerics.gear_coupling: constrained``, a stepper of its own (≈ 11 s).  The compiled code depends on the argument *types* only,
+are cached from then on; so does a ``numerics.gear_coupling`` other than the packaged config's (``stages``
+or ``constrained``: a stepper of its own, ≈ 11 s, which serves the mobility method and the fixed centre alike).  The compiled code depends on the argument *types* only,
 never on a pump's data (:func:`gerotor_twin._jit.typed` keeps the types the same for
 every pump, table size and fluid model), so the cache serves any pump.  A second run,
 or a run after an edit of a module the kernel does not use, compiles nothing and takes

@@ -230,3 +230,22 @@ def test_the_constrained_twin_is_within_the_budget_of_its_reference(cfg, pump, r
                   c.fluid.atmospheric_pa)
     for key, bound in BUDGET.items():
         assert abs(err[key]) <= bound, (key, err[key])
+
+
+def test_the_fixed_centre_runs_the_constrained_stepper_unchanged(cfg):
+    """Behaviour: with ``gear_coupling: constrained`` the fixed centre runs the scheme's own stepper (its
+    ``constraint`` argument has the mobility method's numba type, so one compiled specialisation serves both), and
+    its output is bit for bit the fixed centre's of ``stages``: the gear never moves, so none of the constraint's
+    branches runs."""
+    from numba import typeof
+
+    inp = Inputs(3000 * math.pi / 30, P_ATM, P_ATM + 27.5e5)
+    out = {}
+    for scheme in ("stages", "constrained"):
+        c = replace(cfg, numerics=replace(cfg.numerics, gear_coupling=scheme))
+        m = PumpModel(c, "fixed")
+        assert typeof(m._constraint()) == typeof(PumpModel(c, "mobility")._constraint()), scheme
+        s, o = m.advance(m.initial_state(inp), 0.01, inp)
+        out[scheme] = (s.log_density, s.pressures, o.chamber_pressures, o.delivery_flow)
+    for a, b in zip(out["stages"], out["constrained"]):
+        np.testing.assert_array_equal(a, b)

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..bearing.registry import MODEL_NAMES, make_bearing
 from ..bearing.geometry import BearingGeometry
-from ..config import PumpConfig
+from ..config import Numerics, PumpConfig
 from ..errors import InputError
 from ..geometry.lateral import lateral_geometry
 from ..geometry.tables import GeometryTables, cached_tables
@@ -264,10 +264,9 @@ class PumpModel:
                     theta, t = K.integrate_external(self.bearing, y, e, theta, t, n, h, self.kernel, op, ws, rec,
                                                     rec_p, rec_peak, rec_g, counters, vols)
             else:
-                constrained = self.kernel.pc.gear_constrained and self._move == K.MOVE_MOBILITY   # fixed: no gear
-                with self._first_use() if constrained else contextlib.nullcontext():
+                with self._first_use():
                     theta, t = K.integrate(y, e, theta, t, n, h, self.kernel, op, ws, rec, rec_p, rec_peak, rec_g,
-                                           counters, vols, self._move, ws.gear if constrained else None)
+                                           counters, vols, self._move, self._constraint())
             K.peak_pressures(rec_peak, rec_p, state.pressures, self.kernel.eos)
         if counters[K.C_ABANDONED] != state.counters[K.C_ABANDONED]:
             why = _ABANDONED.get(int(ws.ctrl[K.CT_STATUS]), "unknown status").format(
@@ -289,15 +288,24 @@ class PumpModel:
                         squeeze_velocity=ws.disp[2:4].copy() if n else state.squeeze_velocity.copy())
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
+    def _constraint(self):
+        """The stepper's ``constraint`` argument: the gear's workspace with ``gear_coupling: constrained``, else
+        None.  The fixed centre takes the scheme's stepper too (one compiled specialisation per scheme serves
+        both compiled gear models); its gear never moves, so none of the constraint's branches runs."""
+        return self._ws.gear if self.kernel.pc.gear_constrained else None
+
     def _first_use(self):
-        """Around the first advance of a Method 1 / FDM model or of ``gear_coupling: constrained``: one line if
-        its kernels compile now (they are not built at install, :data:`gerotor_twin.precompile.DEFAULT_MODELS`);
-        later advances: nothing."""
+        """Around the first advance of a Method 1 / FDM model or of a stepper whose ``gear_coupling`` is not the
+        packaged config's: one line if its kernels compile now (they are not built at install,
+        :data:`gerotor_twin.precompile.DEFAULT_MODELS`); later advances: nothing."""
         if self._announced:
             return contextlib.nullcontext()
         self._announced = True
-        if self.kernel.pc.gear_constrained and self._move != K.MOVE_EXTERNAL:
-            what, how_long = "the stepper with numerics.gear_coupling: constrained", "about ten seconds"
+        scheme = self.config.numerics.gear_coupling
+        if self._move != K.MOVE_EXTERNAL:
+            if scheme == Numerics().gear_coupling:       # the packaged config's scheme: built at install
+                return contextlib.nullcontext()
+            what, how_long = f"the stepper with numerics.gear_coupling: {scheme}", "about ten seconds"
         else:
             what, how_long = f"the {self.bearing_name} gear model", "seconds to half a minute"
         return announce_compilation(f"gerotor_twin: compiling {what} on its first use (once: {how_long}; "
