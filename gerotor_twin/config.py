@@ -173,12 +173,13 @@ class Numerics:
     kidney form there, and the embedded error estimate under-reads them (default 0.15; 1: no change;
     pressure measure only).  ``rate_fraction`` and ``top_tolerance`` of older pump files are ignored
     with a notice (:mod:`gerotor_twin.config_notes`).
-    ``gear_coupling = "stages"`` (default): the outer gear's velocity (any bearing model), linearised in
-    the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly);
-    ``"partitioned"``: the gear is moved after each output step by Heun's method and its squeeze spread
-    over the next step (kept for comparison, docs/numerics.md); ``"constrained"``: as ``"stages"``, with the
-    tooth contact as a unilateral constraint on the gear's velocity inside the step and the overlap check's
-    pull-back along the same direction (model/tooth_constraint.py; under evaluation, docs/numerics.md).
+    ``gear_coupling = "constrained"`` (default): the outer gear's velocity (any bearing model), linearised
+    in the load over the output step, squeezes the chambers inside the ROS2 stages (implicitly), with the
+    tooth contact as a unilateral constraint on that velocity inside the step and the overlap check's
+    pull-back along the same direction (model/tooth_constraint.py, docs/numerics.md); ``"stages"``: the
+    same without the constraint (the free velocity runs into the teeth and the check pulls the gear back
+    after the step); ``"partitioned"``: the gear is moved after each output step by Heun's method and its
+    squeeze spread over the next step (kept for comparison, docs/numerics.md).
     ``max_substep_attempts``: the sub-step attempts (accepted and rejected) one output step may take; past
     it the step is abandoned and reported (``model.pump.SolverFailure``): the bound on one call's work the
     node relies on (default 2000, ≈ 10 ms; the pump family takes 2–10; the tight references take 1e6).
@@ -191,7 +192,7 @@ class Numerics:
     error_measure: str = "pressure"
     log_density_tolerance: float = 1e-3
     closing_tolerance: float = 0.15
-    gear_coupling: str = "stages"
+    gear_coupling: str = "constrained"
     max_substep_attempts: int = 2000
 
     def __post_init__(self):

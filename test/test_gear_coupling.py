@@ -75,11 +75,11 @@ def test_external_path_with_the_mobility_kernel_is_the_compiled_path(cfg):
 
 
 def test_the_workspace_of_a_mobility_run_is_coupled(cfg, warm):
-    """Behaviour: after an advance with the default numerics the stages carry the gear (GC_ON); the partitioned
-    setting and the fixed centre leave it off."""
+    """Behaviour: after an advance with the default numerics (``constrained``) the stages carry the gear (GC_ON)
+    with the tooth constraint (GC_CON); the partitioned setting and the fixed centre leave it off."""
     m, inp, s = warm
-    assert cfg.numerics.gear_coupling == "stages"
-    assert m._ws.gear[GC.GC_ON] == 1.0
+    assert cfg.numerics.gear_coupling == "constrained"
+    assert m._ws.gear[GC.GC_ON] == 1.0 and m._ws.gear[GC.GC_CON] == 1.0
     for c, name in ((replace(cfg, numerics=replace(cfg.numerics, gear_coupling="partitioned")), "mobility"),
                     (cfg, "fixed")):
         other = PumpModel(c, name)
@@ -168,19 +168,19 @@ def test_stages_relieve_the_closing_spike_the_partitioned_gear_overshoots(pump, 
     low delivery pressure, where the closing chamber's spike is many times p_d − p_s and is relieved by the
     gear it pushes.  Moved after the output step, the gear answers one step late and the peak overshoots
     beyond the 2 % budget (measured against the stages' reference: +10.6 % on 09 at 1050 rpm / 2 bar, +2.9 %
-    on 10 at 1925 rpm / 0.7 bar); with its squeeze in the stages it is within (−1.3 %, −0.4 %).  Both RMS
-    errors stay inside the budget."""
+    on 10 at 1925 rpm / 0.7 bar); with its squeeze in the stages, as the default ``constrained`` has it, it is
+    within.  Both RMS errors stay inside the budget."""
     cfg = load_config(family_dir() / f"{pump}.yaml")
     pd = cfg.fluid.atmospheric_pa + bar * 1e5
     err = {}
-    for scheme in ("partitioned", "stages"):
+    for scheme in ("partitioned", "constrained"):
         c = replace(cfg, numerics=replace(cfg.numerics, gear_coupling=scheme))
         ref = reference_revolution(c, rpm, bar, "mobility")
         res = run_steady(PumpModel(c, "mobility"), rpm, bar, max_revolutions=40, rtol=1e-6)
         err[scheme] = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, pd)
-    assert cfg.numerics.gear_coupling == "stages"
+    assert cfg.numerics.gear_coupling == "constrained"
     assert err["partitioned"]["peak_pressure_error_gauge"] > BUDGET["peak_pressure_error_gauge"], err
-    assert abs(err["stages"]["peak_pressure_error_gauge"]) <= BUDGET["peak_pressure_error_gauge"], err
+    assert abs(err["constrained"]["peak_pressure_error_gauge"]) <= BUDGET["peak_pressure_error_gauge"], err
     assert max(e["rms_pressure_error_of_range"] for e in err.values()) <= BUDGET["rms_pressure_error_of_range"], err
 
 

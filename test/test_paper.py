@@ -83,17 +83,20 @@ def test_config_uses_the_recorded_calibration(cfg):
 
 @pytest.mark.parametrize("volumes", ["nominal", "displaced"])
 def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
-    """Mobility, Method 1 and FDM: trajectories within 2 % of δ at every point of the cycle and within 0.2 % of δ
+    """Mobility, Method 1 and FDM: trajectories within 2 % of δ at every point of the cycle and within 0.3 % of δ
     RMS (δ = 31.4 µm; measured 2026-12-05, Method 1 / FDM against the mobility method, largest and RMS: chamber
-    volumes of the centred gear, as in the paper, 0.19 / 0.36 µm and 0.018 / 0.030 µm; of the displaced gear
-    0.14 / 0.24 µm and 0.019 / 0.034 µm).  The largest difference is one output step where a port closes, and it
-    is the step control's there, not the film models': the mobility cycle itself is 0.18 µm from its own tight
-    solution (tolerance 1e-8 on ln ρ) at that point, 0.045 µm RMS.
+    volumes of the centred gear, as in the paper, 0.15 / 0.17 µm and 0.021 / 0.019 µm; of the displaced gear,
+    the default, with the tooth contact as a constraint (``gear_coupling: constrained``), 0.12 / 0.26 µm and
+    0.024 / 0.069 µm).  In contact the gear slides along the teeth with the velocity G n of its own film
+    (docs/numerics.md, "The tooth contact as a constraint"), so the film model sets the sliding direction there
+    as well as the speed: FDM's mobility, whose cross-coupling differs most from the short-bearing closed
+    form, slides furthest from the mobility method's (``stages``, where the check pulled the gear back onto the
+    teeth along e after each step: 0.11 / 0.06 µm and 0.020 / 0.015 µm).
 
     Why so close (the film models differ by 1.5–13 % in force for the same eccentricity,
     docs/bearing.md): under the pressure load the outer gear rests on the inner gear at
-    almost every step (the sec. 3.7 overlap check binds), so the position is set by the
-    gear geometry and the film model only decides how fast it gets there.
+    almost every step (the tooth contact binds), so the position is set by the gear geometry
+    and the film model decides how fast it gets there and how it slides along the teeth.
     With the volumes of the displaced gear (the default since issue 13) the gear's speed also
     squeezes the closed chambers; every bearing model moves inside the ROS2 stages
     (``gear_coupling``).  Without ``volumes.PLACEMENT_TOLERANCE`` the difference reached 0.70 / 0.52 µm, 1–3 steps after a
@@ -112,7 +115,7 @@ def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
         assert e.shape == ref.shape
         d = np.hypot(*(e - ref).T)
         assert d.max() < 0.02 * delta, (m, d.max())
-        assert np.sqrt(np.mean(d ** 2)) < 0.002 * delta, (m, np.sqrt(np.mean(d ** 2)))
+        assert np.sqrt(np.mean(d ** 2)) < 0.003 * delta, (m, np.sqrt(np.mean(d ** 2)))
         assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
     assert np.ptp(ref[:, 0]) > 0.1 * delta      # and the trajectory is not a point
 
@@ -133,11 +136,20 @@ def test_trajectory_moves_opposite_ways_with_pressure_and_speed(cfg):
     assert by_pressure * by_speed < 0, x
 
 
+@pytest.mark.xfail(strict=True, reason="not reproduced: the outer gear rests on the inner gear's teeth at 27.5 bar at "
+                   "both speeds, so the pressure moves the tooth-1 gap by the same ≈ 6 µm rms; the independent coupled "
+                   "reference agrees (docs/paper.md, 'Section 4')")
 def test_pressure_changes_the_tooth_gap_more_at_high_speed(cfg):
     """Fig. 12 of the paper: "in the case of high speed, the effect of pressure increase is
     more pronounced than in the low-speed case" — rms change of the tooth-1 gap over a
-    chamber cycle from 5 to 27.5 bar, 3000 vs 1000 rpm (measured 5.5 vs 3.8 µm; we ask
-    for a ratio > 1.2)."""
+    chamber cycle from 5 to 27.5 bar, 3000 vs 1000 rpm; we ask for a ratio > 1.2.  Measured
+    2026-12-05 with the default ``gear_coupling: constrained``: 6.25 µm at 3000 rpm against 6.44 µm
+    at 1000 rpm.  Over one revolution at the same shaft angles the coupled reference
+    (``model/coupled_reference.py``: Radau on pressures and gear together, independent of the
+    twin's time discretisation and contact scheme) gives 6.47 against 6.88 µm, the constrained twin
+    6.10 against 6.04 µm; ``stages``, whose gear the overlap check pulled back after every step,
+    gave 3.75 against 1.85 µm, the paper's ratio, from that artefact (its mean position 1–2 µm from
+    the coupled reference's, the constrained twin's within 0.2 µm)."""
     from gerotor_twin.model.pump import PumpModel
     from gerotor_twin.model.steady import run_steady
     from gerotor_twin.paper.section4 import chamber_cycle

@@ -200,7 +200,8 @@ def test_model_error_floored_at_the_calibration_residual(monkeypatch):
     from gerotor_twin.model.pump import PumpModel
     from gerotor_twin.twin.health import calibration_eta_rmse
     cfg = load_config(Path(__file__).resolve().parent.parent / "bags" / "pump_fitted_bench_map.yaml")
-    e = cfg.calibration["residuals"]["eta_rmse"]
+    res = cfg.calibration["residuals"]
+    e = max(res["eta_rmse"], res.get("eta_rmse_heldout", 0.0))      # the shipped fit is cross-validated
     assert calibration_eta_rmse(cfg) == e > 0
     assert calibration_eta_rmse(load_config()) == 0.0              # uncalibrated: no floor
     from dataclasses import replace
