@@ -33,6 +33,18 @@ Inlining
     :mod:`gerotor_twin._numba_inline` spares numba two copies of each inlined
     callee, which were two thirds of the first compile.
 
+Reference counting off (``_nrt=False``)
+    numba's runtime (NRT) counts references to the arrays compiled code holds: an increment and a decrement,
+    atomic, around every use of an array that its pruning pass (``RefPrunePass``) cannot prove redundant.  The
+    kernels allocate nothing (the stepper works in the preallocated ``Workspace``, its callers own every array
+    it touches), so those counts keep nothing alive; they cost about a third of an output step's time and a
+    sixth of the install's compile (measured side by side: docs/performance.md, "Why the kernel is built as
+    it is").  So :func:`njit` compiles without the runtime by default.  A kernel
+    that allocates an array (``np.empty``, an array expression) does not compile without it (numba refuses
+    at type inference, loudly) and opts in with ``njit(_nrt=True)``; numba refuses as loudly a kernel without
+    it that returns anything but an array it was given.  A kernel without the runtime must not call one with
+    it that returns a new array: nobody would free it.
+
 Argument types
     numba compiles one specialisation per tuple of argument *types*; an ``int``
     where the kernel usually gets a ``float`` (a YAML ``1`` instead of ``1.0``)
@@ -248,8 +260,10 @@ if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("0", ""):
 
 
 def njit(*args, **kwargs):
-    """:func:`numba.njit` with the project's defaults (``cache=True``, ``nogil=True``, ``error_model="numpy"``)."""
+    """:func:`numba.njit` with the project's defaults (``cache=True``, ``nogil=True``, ``error_model="numpy"``,
+    ``_nrt=False``: no reference counting, above)."""
     kwargs.setdefault("cache", True)
     kwargs.setdefault("nogil", True)
     kwargs.setdefault("error_model", "numpy")
+    kwargs.setdefault("_nrt", False)
     return numba.njit(*args, **kwargs)

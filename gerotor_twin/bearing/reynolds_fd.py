@@ -145,7 +145,7 @@ def make_grid(geometry: BearingGeometry, nx: int, ny: int) -> FdGrid:
                   np.ascontiguousarray(sigma[:, None] * sines))
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def fd_fields(ex, ey, omega, c, radius, mu, dx, cos_t, sin_t, lam, synth):
     """Solve the discrete Reynolds equation for the three right-hand sides.
 
@@ -248,7 +248,7 @@ def _clipped_force(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area):
     return fx * area, fy * area, j11 * area, j12 * area, j21 * area, j22 * area
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def _full_jacobian(p_x, p_y, cos_t, sin_t, area):
     """Jacobian of the unclipped force: fallback when no node is in the loaded film."""
     nx, m = p_x.shape
@@ -266,7 +266,7 @@ def _full_jacobian(p_x, p_y, cos_t, sin_t, area):
     return j
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def fdm_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu, dx, dy, cos_t, sin_t, lam,
                  synth):
     """Journal-centre velocity by the FDM: solve Eq. (19) of [1]_ for ``e_dot`` [m/s].

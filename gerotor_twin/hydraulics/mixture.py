@@ -361,7 +361,7 @@ def mixture_pressure(s, beta_l, alpha0, n, p_vap, p0):
     return p_vap + math.exp(x)
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def mixture_pressure_array(s, beta_l, alpha0, n, p_vap, p0):
     """p(s) [Pa] for every element of a 1-D float64 array ``s`` [-]."""
     out = np.empty(s.shape[0])
@@ -370,7 +370,7 @@ def mixture_pressure_array(s, beta_l, alpha0, n, p_vap, p0):
     return out
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def mixture_table(s_nodes, beta_l, alpha0, n, p_vap, p0):
     r"""Nodes of a cubic Hermite table of p(s): pressures and slopes dp/ds = β.
 

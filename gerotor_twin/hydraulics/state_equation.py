@@ -331,7 +331,7 @@ def convert_log_density(y: np.ndarray, old: StateEquation, new: StateEquation) -
     return _convert_log_density(np.ascontiguousarray(y, dtype=np.float64), old, new)
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def _convert_log_density(y, old, new):
     out = np.empty_like(y)
     for i in range(y.size):

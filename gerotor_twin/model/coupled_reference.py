@@ -63,7 +63,7 @@ def _gap_rate(tab, delta, theta, omega, ex, ey, k, c):
     return (gp - gap_value(c, delta, ex, ey, 0.0)) / (2.0 * d) * omega
 
 
-@njit
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     """d/dt of z = (y [-], e [m]) [1/s, m/s] into ``out`` at t [s] (θ = θ₀ + ωt [rad]); τ: the relaxation [s].
 
