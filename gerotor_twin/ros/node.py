@@ -56,6 +56,7 @@ What it does
 from __future__ import annotations
 
 import functools
+import gc
 import os
 import signal
 import sys
@@ -671,6 +672,10 @@ def main(argv=None) -> int:
                 return 2
             raise
         executor = _executor(node)
+        # Everything built so far (modules, numba's dispatchers, the model) lives as long as the node: out of the
+        # cyclic collector's reach, a full collection no longer walks it (≈ 30 ms with the GIL held, which stalls
+        # the model thread and the executor alike; docs/performance.md, "The node's garbage collector").
+        gc.freeze()
         main_spin = _spin_main_node(node, stop) if node.input_node is not node else None
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
