@@ -132,3 +132,51 @@ def test_big_endian_and_unknown_types_go_generic():
     assert decode_fast(m.DIAGNOSTIC_ARRAY, data) is None
     with pytest.raises(InputError):
         decode(m.JOINT_STATE, b"\x00\x01\x00\x00" + b"\xff" * 40)
+
+
+def test_the_log_writes_the_outputs_with_the_fast_encoders(tmp_path, monkeypatch):
+    """Behaviour: ``McapLog.encode`` (what ``run-bag`` and the offline tools log through) takes the fast encoder
+    of each periodic output type for a dict, and its bytes are mcap_ros2's (through the project codec); an
+    object (a decoded message) still goes to the generic encoder."""
+    import gerotor_twin.io.codec as codec
+    from gerotor_twin.io.fastcdr import FAST_ENCODERS
+    from gerotor_twin.io.mcap_log import McapLog
+    samples = {m.FLOAT64: m.float64(2.5), m.VECTOR3_STAMPED: m.vector3_stamped(5, 1.0, 2.0, 3.0),
+               m.FLUID_PRESSURE: m.fluid_pressure(5, 101325.0, frame_id="pump_housing"),
+               m.JOINT_STATE: m.joint_state(7, name=["a", "b"], position=[1.0, 2.0], frame_id="p"),
+               m.FLOAT64_MULTIARRAY: m.float64_multiarray(np.arange(7.0), ("chamber",))}
+    assert set(samples) == set(FAST_ENCODERS)
+    generic = {t: generic_encode(t, msg) for t, msg in samples.items()}
+    used = []
+    real = codec.encoder_for
+    monkeypatch.setattr("gerotor_twin.io.mcap_log.encoder_for", lambda t: used.append(t) or real(t))
+    with McapLog(tmp_path / "x.mcap", overwrite=True) as log:
+        for k, (t, msg) in enumerate(samples.items()):
+            log.add_topic(f"/t{k}", t)
+            assert log.encode(f"/t{k}", msg) == generic[t]
+        assert used == []                                   # every dict by its fast encoder
+        obj = decode(m.VECTOR3_STAMPED, generic[m.VECTOR3_STAMPED])
+        assert log.encode("/t1", obj) == generic[m.VECTOR3_STAMPED] and used == [m.VECTOR3_STAMPED]
+
+
+@pytest.mark.parametrize("msg,named", [({"dat": 1.0}, "dat"), ({"data": 1.0, "extra": 2.0}, "extra"),
+                                       ({"data": "x"}, "Float64")])
+def test_the_log_names_a_bad_output_dict_as_the_generic_encoder_does(tmp_path, msg, named):
+    """Behaviour: a dict whose fields differ from the type's (misspelt, unknown) or whose value is not a number
+    does not go through the fast encoder silently: the log raises the generic encoder's InputError."""
+    from gerotor_twin.io.mcap_log import McapLog
+    with McapLog(tmp_path / "x.mcap", overwrite=True) as log:
+        log.add_topic("/f", m.FLOAT64)
+        with pytest.raises(InputError, match=named):
+            log.encode("/f", msg)
+
+
+def test_the_log_names_a_misspelt_nested_field_as_the_generic_encoder_does(tmp_path):
+    """Behaviour: a nested field misspelt (the header's stamp) takes the generic encoder's InputError too."""
+    from gerotor_twin.io.mcap_log import McapLog
+    msg = m.vector3_stamped(5, 1.0, 2.0, 3.0)
+    msg["header"] = {"stmp": msg["header"]["stamp"], "frame_id": ""}
+    with McapLog(tmp_path / "x.mcap", overwrite=True) as log:
+        log.add_topic("/v", m.VECTOR3_STAMPED)
+        with pytest.raises(InputError, match="stmp"):
+            log.encode("/v", msg)

@@ -29,7 +29,7 @@ from mcap_ros2._vendor.rosidl_adapter.parser import parse_message_string
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.schemas import message_definition
 
-__all__ = ["encode", "encoder_for", "split_definitions"]
+__all__ = ["encode", "encoder_for", "field_names", "split_definitions"]
 
 _SPLIT = "\n" + "=" * 80 + "\nMSG: "
 
@@ -134,6 +134,14 @@ def encoder_for(msgtype: str) -> Callable[[Any], bytes]:
             raise InputError(short, msg, f"a valid {definition.msgtype}", str(exc)) from None
 
     return encode_one
+
+
+@functools.lru_cache(maxsize=None)
+def field_names(msgtype: str) -> frozenset:
+    """The names of the top-level fields of ``msgtype`` (cached per type)."""
+    definition = message_definition(msgtype)
+    pkg, _, typ = definition.msgtype.split("/")
+    return frozenset(f.name for f in _field_table(definition.msgtype)[f"{pkg}/{typ}"])
 
 
 def encode(msgtype: str, msg: Any) -> bytes:

@@ -34,7 +34,7 @@ import numpy as np
 from gerotor_twin.io import messages as m
 from gerotor_twin.io.codec import encode as generic_encode
 
-__all__ = ["encode_float64_multiarray", "encode", "decode_fast", "FAST_DECODERS"]
+__all__ = ["encode_float64_multiarray", "encode", "decode_fast", "FAST_DECODERS", "FAST_ENCODERS"]
 
 _LE = b"\x00\x01"              # encapsulation: CDR, little endian
 _F64 = struct.Struct("<d")
@@ -143,6 +143,10 @@ _ENCODERS: dict[str, Callable[[dict], bytes]] = {
     m.FLOAT64_MULTIARRAY: encode_float64_multiarray, m.FLOAT64: encode_float64,
     m.VECTOR3_STAMPED: encode_vector3_stamped, m.FLUID_PRESSURE: encode_fluid_pressure,
     m.JOINT_STATE: encode_joint_state}
+
+
+#: The fast encoders by message type (each takes the dict of :mod:`gerotor_twin.io.messages`).
+FAST_ENCODERS = _ENCODERS
 
 
 def encode(msgtype: str, msg: Any) -> bytes:
