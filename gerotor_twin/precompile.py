@@ -1,15 +1,15 @@
 """Build the numba cache at install time: ``python -m gerotor_twin.precompile``.
 
-The first model start compiles the stepper (42 specialisations, ≈ 26–30 s on the dev machine's two cores);
+The first model start compiles the stepper (43 specialisations, ≈ 33–36 s on the dev machine's two cores);
 ``make setup`` runs this module once so that no user waits for it.  It runs
 what a first model start runs — a few output steps of the default pump with
 each gear model given (default: ``mobility``, the twin's, and ``fixed``, which adds
 nothing to it), an oil-temperature change, a zero-length call — so numba compiles
 and caches exactly the specialisations a user hits.  The other gear models (Method 1
-``short``, ``fdm``) add 8 and 5 small specialisations of their own, ≈ 3–5 s each: they
+``short``, ``fdm``) add 9 and 5 small specialisations of their own, ≈ 5–6 s each: they
 compile on their first use, announced by one line (:class:`announce_compilation`), and
 are cached from then on; so does a ``numerics.gear_coupling`` other than the packaged config's (``stages``
-or ``constrained``: a stepper of its own, ≈ 11 s, which serves the mobility method and the fixed centre alike).  The compiled code depends on the argument *types* only,
+or ``constrained``: a stepper of its own, ≈ 9 s, which serves the mobility method and the fixed centre alike).  The compiled code depends on the argument *types* only,
 never on a pump's data (:func:`gerotor_twin._jit.typed` keeps the types the same for
 every pump, table size and fluid model), so the cache serves any pump.  A second run,
 or a run after an edit of a module the kernel does not use, compiles nothing and takes
