@@ -674,7 +674,7 @@ def main(argv=None) -> int:
         executor = _executor(node)
         # Everything built so far (modules, numba's dispatchers, the model) lives as long as the node: out of the
         # cyclic collector's reach, a full collection no longer walks it (≈ 30 ms with the GIL held, which stalls
-        # the model thread and the executor alike; docs/performance.md, "The node's garbage collector").
+        # the model thread and the executor alike; docs/performance.md, "Why the node is built as it is").
         gc.freeze()
         main_spin = _spin_main_node(node, stop) if node.input_node is not node else None
         while not stop.is_set() and rclpy.ok():
