@@ -139,19 +139,16 @@ def encode_joint_state(msg: dict) -> bytes:
     return bytes(buf)
 
 
-_ENCODERS: dict[str, Callable[[dict], bytes]] = {
+#: The fast encoders by message type (each takes the dict of :mod:`gerotor_twin.io.messages`).
+FAST_ENCODERS: dict[str, Callable[[dict], bytes]] = {
     m.FLOAT64_MULTIARRAY: encode_float64_multiarray, m.FLOAT64: encode_float64,
     m.VECTOR3_STAMPED: encode_vector3_stamped, m.FLUID_PRESSURE: encode_fluid_pressure,
     m.JOINT_STATE: encode_joint_state}
 
 
-#: The fast encoders by message type (each takes the dict of :mod:`gerotor_twin.io.messages`).
-FAST_ENCODERS = _ENCODERS
-
-
 def encode(msgtype: str, msg: Any) -> bytes:
     """Fast path for the node's periodic outputs, the project codec for everything else."""
-    fast = _ENCODERS.get(msgtype)
+    fast = FAST_ENCODERS.get(msgtype)
     return generic_encode(msgtype, msg) if fast is None else fast(msg)
 
 

@@ -41,6 +41,7 @@ from mcap.writer import CompressionType, Writer
 from gerotor_twin import __version__
 from gerotor_twin.errors import InputError
 from gerotor_twin.io.codec import encoder_for, field_names
+from gerotor_twin.io.fastcdr import FAST_ENCODERS
 from gerotor_twin.io.qos import QosSpec, resolve_qos
 from gerotor_twin.io.rosbag2_meta import ROSBAG2_METADATA, TopicCount, rosbag2_record
 from gerotor_twin.io.schemas import SCHEMA_ENCODING, message_definition, normalize_msgtype
@@ -376,7 +377,6 @@ class McapLog:
         An unknown field nested inside a known one is not seen on the fast path."""
         msgtype = self._topic(topic).msgtype
         if isinstance(msg, dict):
-            from gerotor_twin.io.fastcdr import FAST_ENCODERS
             fast = FAST_ENCODERS.get(msgtype)
             if fast is not None and msg.keys() == field_names(msgtype):   # else the generic error names it
                 try:
