@@ -94,3 +94,21 @@ def test_table_cache_is_keyed_on_the_code_that_builds_it(monkeypatch, tmp_path, 
     other = T.cached_tables(g, cfg.suction_port, cfg.delivery_port, size)
     assert len(list(tmp_path.glob("tables_*.npz"))) == 2
     assert np.array_equal(other.data, first.data)
+
+
+def test_locate_wraps_every_angle_into_the_table():
+    """Closed form: θ·scale mod m gives the row pair (i0, i0 + 1 mod m) and the weight f in [0, 1) for any angle,
+    negative and many periods away; an angle whose wrap rounds up to m, and a non-finite one, read row 0."""
+    from collections import namedtuple
+    tab_t = namedtuple("Tab", "rows scale")
+    m = 16
+    tab = tab_t(np.zeros((m, 1)), m / (2 * math.pi))
+    for theta in (0.0, 1.0, -1.0, 2 * math.pi - 1e-12, 37.3 * 2 * math.pi + 0.4, -5.5 * 2 * math.pi, 15.5 / tab.scale):
+        x = (theta * tab.scale) % m                       # Python's float mod: 0 ≤ x < m
+        i0, i1, f = C.locate(tab, theta)
+        assert (i0, i1) == (int(x), (int(x) + 1) % m)
+        assert f == pytest.approx(x - int(x), abs=1e-9)
+    assert C.locate(tab, -1e-300)[:2] == (0, 1)           # wraps to m in floating point: row 0, weight 0
+    assert C.locate(tab, -1e-300)[2] == 0.0
+    assert C.locate(tab, 15.9999 / tab.scale)[:2] == (15, 0)
+    assert C.locate(tab, math.nan)[:2] == (0, 1)          # no index outside the table

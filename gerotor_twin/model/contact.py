@@ -35,11 +35,15 @@ def locate(tab, theta):
     """Row pair and weight (i0, i1, f) of shaft angle θ [rad] in the periodic table."""
     m = tab.rows.shape[0]
     x = theta * tab.scale
-    x -= m * math.floor(x / m)                  # periodic: 0 ≤ x < m (no fmod call)
-    i = int(x)
-    f = x - i
-    i0 = i % m
-    return i0, (i0 + 1) % m, f
+    x -= m * math.floor(x / m)                  # periodic: 0 ≤ x ≤ m (no fmod call)
+    i0 = int(x)
+    f = x - i0
+    if i0 >= m or i0 < 0:                       # x rounded up to m (or θ not finite): row 0
+        i0 = 0
+    i1 = i0 + 1                                 # branches, not ``%``: an integer division costs ≈ 40 cycles
+    if i1 == m:
+        i1 = 0
+    return i0, i1, f
 
 
 @njit(inline="always")

@@ -189,7 +189,7 @@ def tip_flows(gaps, km, op, ws, jac, want_jac):
     n = pc.n
     p, geo = ws.p, ws.geo
     for j in range(n):
-        jm = (j - 1) % n
+        jm = j - 1 if j > 0 else n - 1      # not (j − 1) % n: an integer division per chamber
         q = 0.0
         dq = 0.0
         hk = gaps[j]
