@@ -43,8 +43,8 @@ import math
 
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
-from ..geometry.tables import ARM, FX, FY, GX, GY, HXX, HXY, HYY, TQ
-from .contact import column, locate
+from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
+from .contact import column, gap_coefficients, locate
 from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility
 
@@ -247,21 +247,22 @@ def set_velocity(gc, fx, fy, v0, v1, v2, d):
 
 
 @njit(inline="always")
-def set_constraint(ex, ey, theta, h, km, gc):
+def set_constraint(ex, ey, theta, h, km, gc, cmat):
     """Switch the tooth constraint on for the output step of h [s] that ends at shaft angle θ [rad], the gear at
     (ex, ey) [m]: the two lobes whose gaps (inner gear unturned) are smallest there, their normals, G n and the
     rates r = g/h that hold each gap at zero at the step's end (Moreau's time-stepping, :mod:`.tooth_constraint`).
-    Call after :func:`set_velocity` (G)."""
+    Call after :func:`set_velocity` (G).  The gap expansions at θ are left in ``cmat`` (N, 9), where the overlap
+    check at the step's end reads them (:func:`.contact.contact`, ``reuse``)."""
     tab, pc = km.tab, km.pc
     g1 = g2 = math.inf
     n1x = n1y = n2x = n2y = 0.0
     for k in range(pc.n):
-        i0, i1, f = locate(tab, theta + k * tab.shift)
-        c0 = column(tab, GX, i0, i1, f)
-        c1 = column(tab, GY, i0, i1, f)
-        cxx = column(tab, HXX, i0, i1, f)
-        cxy = column(tab, HXY, i0, i1, f)
-        cyy = column(tab, HYY, i0, i1, f)
+        gap_coefficients(tab, theta, k, cmat[k])
+        c0 = cmat[k, 0]
+        c1 = cmat[k, 1]
+        cxx = cmat[k, 3]
+        cxy = cmat[k, 4]
+        cyy = cmat[k, 5]
         g = pc.tip_clearance + c0 * ex + c1 * ey + 0.5 * (cxx * ex * ex + 2.0 * cxy * ex * ey + cyy * ey * ey)
         nx = c0 + cxx * ex + cxy * ey                  # .contact.gap_value (γ = 0) and .tooth_constraint.gap_normal
         ny = c1 + cxy * ex + cyy * ey
@@ -288,7 +289,7 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
                  mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
 
 
-def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):
+def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):
     """:func:`linearise` with another bearing model's velocity kernel (Method 1, FDM), from Python: numba caches
     no compiled function that takes a function."""
     fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
@@ -298,7 +299,7 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     set_velocity(gc, fx, fy, k(ex, ey, fx, fy, omega2, bp), k(ex, ey, fx + d, fy, omega2, bp),
                  k(ex, ey, fx, fy + d, omega2, bp), d)
     if km.pc.gear_constrained and h > 0.0:
-        set_constraint(ex, ey, theta + omega * h, h, km, gc)
+        set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
 
 
 @njit(inline="always")

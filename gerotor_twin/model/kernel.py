@@ -66,7 +66,7 @@ from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
                             close_pending, gear_move, linearise, linearise_with, set_constraint)
 from .loads import outer_gear_load
-from .params import (CT_BOUND, CT_CLOSING, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
+from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
 from .step_control import (GAMMA, defect_error, defect_threshold, embedded_error, error_norm, error_weights,
                            port_filtered, step_factor, update_range)
@@ -262,8 +262,11 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     h = big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
     h_min = big_h * 1e-5
     done = 0.0
-    # gaps at the end of the output step; inside it they are interpolated linearly in time
-    contact(km.tab, pc.n, pc.tip_clearance, theta + op.omega * big_h, ex, ey, ws.gaps_end, ws.cmat, bool(False))
+    # gaps at the end of the output step; inside it they are interpolated linearly in time (the expansions there
+    # are in ws.cmat already if the tooth constraint was set up for this step)
+    contact(km.tab, pc.n, pc.tip_clearance, theta + op.omega * big_h, ex, ey, ws.gaps_end, ws.cmat,
+            bool(ws.ctrl[CT_CMAT_END] != 0.0))
+    ws.ctrl[CT_CMAT_END] = 0.0
     for k in range(pc.n):
         ws.gaps_start[k] = ws.gaps0[k]
     attempts = 0
@@ -417,6 +420,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     # the caller (integrate_external), one output step per call
     coupled = move != MOVE_FIXED and gear_in_stages(km)
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat, bool(False))
+    ws.ctrl[CT_CMAT_END] = 0.0                     # ws.cmat holds θ's expansions
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     if not coupled:
         ws.gear[GC_ON] = 0.0
@@ -424,7 +428,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         to_pressures(y, km, ws.pres)
         linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
         if constraint is not None and h > 0.0:
-            set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear)
+            set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear, ws.cmat)
+            ws.ctrl[CT_CMAT_END] = 1.0             # and the step's end: pressure_step's tip gaps read them
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
@@ -469,7 +474,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         if coupled and move == MOVE_MOBILITY:
             linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
             if constraint is not None and h > 0.0:
-                set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear)
+                set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear, ws.cmat)
+                ws.ctrl[CT_CMAT_END] = 1.0
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
@@ -523,7 +529,7 @@ def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, w
     for i in range(n_steps):
         ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
         to_pressures(y, km, ws.pres)
-        linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        linearise_with(bearing, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows, ws.cmat)
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL,
                              ws.gear if km.pc.gear_constrained else None)

@@ -36,7 +36,7 @@ __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspa
            "operating", "workspace", "at_temperature", "at_load", "lateral_gap", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
            "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE",
            "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND",
-           "CT_DEFECT_H", "N_CTRL"]
+           "CT_DEFECT_H", "CT_CMAT_END", "N_CTRL"]
 
 #: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
 #: delivered (net out of the delivery port, after the line leakages) [m³/s], in through the
@@ -53,9 +53,10 @@ ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 #: ``Workspace.ctrl`` entries: the proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ); the
 #: pending sub-step [s]; how many ports close within the horizon; the chamber pressures' recent range [Pa]; why
 #: the last output step was abandoned; the sub-step attempts an output step may take; the sub-step [s] above which
-#: the defect check runs (``step_control.defect_threshold``) (see ``Workspace.ctrl``)
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H = range(8)
-N_CTRL = 8
+#: the defect check runs (``step_control.defect_threshold``); 1 if ``Workspace.cmat`` holds the gap expansions at
+#: the end of the next output step (``gear_coupling.set_constraint``) (see ``Workspace.ctrl``)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H, CT_CMAT_END = range(9)
+N_CTRL = 9
 
 
 #: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
@@ -158,7 +159,8 @@ class Workspace(NamedTuple):
                             #: the chamber pressures' recent range, the error scale's (step_control.update_range) [Pa];
                             #: why the last output step was abandoned (kernel.STEP_*);
                             #: the sub-step attempts an output step may take (numerics.max_substep_attempts);
-                            #: the sub-step above which the defect check runs (step_control.defect_threshold) [s]
+                            #: the sub-step above which the defect check runs (step_control.defect_threshold) [s];
+                            #: 1 if ``cmat`` holds the next output step's end (gear_coupling.set_constraint)
     disp: np.ndarray        #: (4,) outer-gear displacement the chamber volumes are taken at [m] and the
                             #: velocity of its last move [m/s] (:mod:`.volumes`), set from the state at each
                             #: ``advance`` (``PumpState.eccentricity``, ``squeeze_velocity``) and returned in it
