@@ -313,16 +313,6 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
 
 
 @njit(inline="always")
-def highest_peak(peak, n, eos):
-    """The highest of the n chambers' ln ρ peaks ``peak`` as a pressure [Pa] (−inf if none yet): one conversion, the
-    state equation being monotonic."""
-    hi = -math.inf
-    for i in range(n):
-        hi = max(hi, peak[i])
-    return pressure_of(hi, eos) if hi > -math.inf else -math.inf
-
-
-@njit(inline="always")
 def to_pressures(y, km, out):
     """Pressures [Pa] of the log-density state; returns how many volumes are cavitating."""
     cav = 0
@@ -456,7 +446,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             integrals[FL_DELIVERY] += y[pc.n]
             y[pc.n] = op.s_d
         counters[C_CAVITATION] += to_pressures(y, km, ws.pres)
-        update_range(ws.ctrl, highest_peak(ws.peak, pc.n, km.eos), ws.pres, pc.n, fade)   # the next step's error scale
+        update_range(ws.ctrl, ws.peak, ws.pres, pc.n, fade)   # the error scale of the next step
         theta += op.omega * h
         t += h
         fx = 0.0
