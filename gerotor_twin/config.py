@@ -162,7 +162,7 @@ class Numerics:
     ``error_measure = "pressure"`` (default): a ROS2 sub-step is accepted when in
     every volume the error of the pressure is at most ``tolerance`` × Δp_ref, the error scale:
     the larger of p_delivery − p_suction and the chamber pressures' range over about the last
-    revolution (highest peak − lowest sample), at least 1 bar; and, where the oil is compressible
+    revolution (highest − lowest sample), at least 1 bar; and, where the oil is compressible
     (β small, below atmospheric pressure), the error of ln(ρ/ρ₀) at most ``log_density_tolerance``
     (≈ the mass error; it decides the filling, hence the volumetric efficiency).
     ``"log_density"``: the absolute error of ln(ρ/ρ₀) at most ``tolerance`` everywhere

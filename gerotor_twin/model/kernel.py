@@ -24,7 +24,7 @@ chamber forms there (and that of a chamber refilled from the delivery kidney), a
 the embedded error estimate under-reads it (docs/numerics.md).  The error of a
 sub-step is the difference to the embedded first-order solution, measured on
 the pressure relative to Δp_ref, the larger of p_delivery − p_suction and the range of
-the chamber pressures over about the last revolution (highest peak − lowest pressure, updated
+the chamber pressures over about the last revolution (highest − lowest sample, updated
 every output step: :func:`update_range`, carried in :attr:`.records.PumpState.pressure_range`),
 at least 1 bar (or on ln ρ,
 ``numerics.error_measure``).  The range is the scale of the waveform the budget is
@@ -446,7 +446,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             integrals[FL_DELIVERY] += y[pc.n]
             y[pc.n] = op.s_d
         counters[C_CAVITATION] += to_pressures(y, km, ws.pres)
-        update_range(ws.ctrl, ws.peak, ws.pres, pc.n, fade)   # the error scale of the next step
+        update_range(ws.ctrl, ws.pres, pc.n, fade)   # the error scale of the next step
         theta += op.omega * h
         t += h
         fx = 0.0

@@ -55,7 +55,7 @@ class PumpState:
     volumes: np.ndarray = field(default_factory=lambda: np.zeros(N_FLOWS))  #: ∫ flow dt per FL_* index [m³]
     swept_angle: float = 0.0    #: ∫ω dt since start [rad]
     substep: float = 0.0        #: proposed ROS2 sub-step for the next call [s] (0: the output step)
-    #: the chamber pressures' recent range, highest peak − lowest pressure, fading by 1/e per revolution [Pa]
+    #: the chamber pressures' recent range, highest − lowest sample, fading by 1/e per revolution [Pa]
     #: (the scale of the sub-step error control: :func:`.step_control.update_range`)
     pressure_range: float = 0.0
     #: (2,) velocity of the outer gear's last move that the chamber volumes have taken up, whose squeeze the next

@@ -66,22 +66,24 @@ def error_scale(op, ws):
 
 
 @njit
-def update_range(ctrl, peak, pres, n, fade):
+def update_range(ctrl, pres, n, fade):
     r"""The chamber pressures' recent range after an output step, into ``ctrl[CT_RANGE]`` [Pa].
 
-    .. math:: R_k = \max\left(R_{k-1} f,\; \max_i \max(\hat p_i, p_i) - \min_i p_i\right),
+    .. math:: R_k = \max\left(R_{k-1} f,\; \max_i p_i - \min_i p_i\right),
               \qquad f = e^{-\omega h / 2\pi}
 
-    over the n chambers: p_i their pressures at the step's end, p̂_i their peaks over the step so far
-    (``ws.peak``); f fades the range by 1/e per revolution.  At every instant some chamber is near suction
-    pressure and, once a revolution, one at its spike, so R is about the waveform's range over the last
-    revolution: the scale the error budget is stated on (docs/numerics.md).  Updated per output step, not
-    per call, so a run split into calls at step boundaries is the run in one call.
+    over the n chambers: p_i their pressures at the step's end (``pres``, the output samples); f fades the
+    range by 1/e per revolution.  At every instant some chamber is near suction pressure and, once a
+    revolution, one at its spike, so R is about the waveform's range over the last revolution: the scale the
+    error budget is stated on (docs/numerics.md).  The samples miss up to ≈ 3 % of a spike's top between them;
+    counting the peaks between samples was measured and is not used (docs/numerics.md, "The sub-step error
+    scale").  Updated per output step, not per call, so a run split into calls at step boundaries is the run
+    in one call.
     """
     hi = -math.inf
     lo = math.inf
     for i in range(n):
-        hi = max(hi, peak[i], pres[i])
+        hi = max(hi, pres[i])
         lo = min(lo, pres[i])
     ctrl[CT_RANGE] = max(ctrl[CT_RANGE] * fade, hi - lo)
 
