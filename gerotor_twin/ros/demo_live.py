@@ -286,7 +286,7 @@ def main(argv=None) -> int:
     out = Path(args.out).resolve()
     log_dir = out / "log"
     log_dir.mkdir(parents=True, exist_ok=True)
-    print("demo: model kernels (compiled once after an install, about a minute; cached after) ...", flush=True)
+    print("demo: model kernels (compiled by make setup; on a cold cache once now, under a minute) ...", flush=True)
     print(f"demo: model kernels ready in {_compile_kernels(args.model):.1f} s", flush=True)
     t0 = time.monotonic()
     steps, config, cal_log = _calibrated_steps(args, out)
