@@ -99,3 +99,29 @@ def test_bench_numerics_override_refused_from_the_shell():
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     assert "nosuchkey" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_a_reference_does_not_depend_on_the_pressure_measures_settings(cfg):
+    """Behaviour: the log-density measure of the references does not read ``closing_tolerance`` or
+    ``log_density_tolerance`` (a run at those numerics is the same bit for bit with other values), so an A/B of
+    either over the family keeps every cached reference: the reference configuration, hence its key, is the same."""
+    import math
+    from gerotor_twin.model.pump import Inputs, PumpModel
+    from gerotor_twin.model.steady import reference_config
+
+    def numerics(c, **kw):
+        return dataclasses.replace(c, numerics=dataclasses.replace(c.numerics, **kw))
+
+    other = numerics(cfg, closing_tolerance=0.5, log_density_tolerance=1e-2)
+    assert RC.reference_key(reference_numerics(other, 3000.0), 3000.0, 27.5, "mobility") == \
+        RC.reference_key(reference_numerics(cfg, 3000.0), 3000.0, 27.5, "mobility")
+    inp = Inputs(3000 * math.pi / 30, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + 27.5e5)
+    runs = []
+    for c in (cfg, other):
+        tight = numerics(reference_config(c), closing_tolerance=c.numerics.closing_tolerance,
+                         log_density_tolerance=c.numerics.log_density_tolerance, tolerance=1e-6)
+        m = PumpModel(tight, "mobility")
+        s, out = m.advance(m.initial_state(inp), 120 * m.step_size(inp.omega), inp)
+        runs.append((s.log_density, out.chamber_peak_pressures, s.counters))
+    for a, b in zip(*runs):
+        assert np.array_equal(a, b)

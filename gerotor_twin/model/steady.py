@@ -6,10 +6,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..config import Numerics
 from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
 from .volumetric import EdgeLosses
+
+#: The defaults of the settings the log-density measure does not read (:func:`reference_config`).
+_PRESSURE_MEASURE_ONLY = Numerics()
 
 __all__ = ["SteadyResult", "run_steady", "reference_config", "min_open_gap", "effective_gap"]
 
@@ -95,11 +99,15 @@ class SteadyResult:
 
 def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, max_step_s: float | None = None):
     """The same pump with tight solver settings: ``tolerance`` on ln(ρ/ρ₀) everywhere (the reference mode),
-    and a work bound per output step (``max_substep_attempts``) an offline run never meets."""
+    and a work bound per output step (``max_substep_attempts``) an offline run never meets.  The settings of the
+    pressure measure alone (``closing_tolerance``, ``log_density_tolerance``: :func:`.step_control.error_weights`)
+    take their defaults, so a reference and its cache key (:mod:`.reference_cache`) do not depend on them."""
     n = cfg.numerics
     return replace(cfg, numerics=replace(n, tolerance=tolerance, max_step_deg=max_step_deg,
                                          max_step_s=n.max_step_s if max_step_s is None else max_step_s,
                                          error_measure="log_density",
+                                         closing_tolerance=_PRESSURE_MEASURE_ONLY.closing_tolerance,
+                                         log_density_tolerance=_PRESSURE_MEASURE_ONLY.log_density_tolerance,
                                          max_substep_attempts=1_000_000))
 
 
