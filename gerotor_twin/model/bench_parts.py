@@ -2,7 +2,9 @@
 
 ``gerotor-twin bench parts`` (printed figures, never asserted in tests).  At an operating point the model is
 run to its periodic state; then each part below is called in a compiled loop at that state and timed (the
-fastest of several batches, so another process on the machine inflates the figures less), and the whole
+fastest of several batches, so another process on the machine inflates the figures less), the shaft angle one
+output step further at each call, so that the calls read the table rows a revolution reads (at one angle the
+rows would stay in the L1 cache), and the whole
 output step is timed through :meth:`~.pump.PumpModel.advance` over a revolution with the counts of accepted
 and rejected sub-steps per output step.  The parts are those the stepper calls (:mod:`.kernel`):
 
@@ -48,16 +50,16 @@ PARTS = ("rhs_jacobian", "rhs", "first_stage", "ros2_step", "lu", "contact", "li
 
 
 @njit
-def _loop_rhs(y, th, km, op, ws, want_jac, reps):
+def _loop_rhs(y, th, dth, km, op, ws, want_jac, reps):
     for r in range(reps):
-        rhs(y, th + 1e-12 * r, ws.gaps0, km, op, ws, ws.f1, ws.jac, want_jac)
+        rhs(y, th + r * dth, ws.gaps0, km, op, ws, ws.f1, ws.jac, want_jac)
 
 
 @njit
-def _loop_first_stage(y, th, km, op, ws, integrals, big_h, reps):
+def _loop_first_stage(y, th, dth, km, op, ws, integrals, big_h, reps):
     for r in range(reps):
         ws.ctrl[CT_PENDING] = 0.0
-        K._first_stage(y, th + 1e-12 * r, km, op, ws, integrals, big_h)
+        K._first_stage(y, th + r * dth, km, op, ws, integrals, big_h)
 
 
 @njit
@@ -82,16 +84,16 @@ def _loop_lu(h, ws, reps):
 
 
 @njit
-def _loop_contact(th, ex, ey, km, ws, reps):
+def _loop_contact(th, dth, ex, ey, km, ws, reps):
     pc = km.pc
     for r in range(reps):
-        contact(km.tab, pc.n, pc.tip_clearance, th + 1e-12 * r, ex, ey, ws.gaps_end, ws.cmat)
+        contact(km.tab, pc.n, pc.tip_clearance, th + r * dth, ex, ey, ws.gaps_end, ws.cmat)
 
 
 @njit
-def _loop_linearise(th, h, ex, ey, kc, km, op, ws, reps):
+def _loop_linearise(th, dth, h, ex, ey, kc, km, op, ws, reps):
     for r in range(reps):
-        linearise(ex, ey, th + 1e-12 * r, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
+        linearise(ex, ey, th + r * dth, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
 
 
 def _fastest(loop, args, reps: int, batches: int) -> float:
@@ -133,15 +135,16 @@ def time_parts(config, rpm: float, bar: float, model: str = "mobility", reps: in
     ex, ey = float(s.eccentricity[0]), float(s.eccentricity[1])
     K.to_pressures(y, km, ws.pres)
     integrals = np.zeros(ws.flows.shape[0])
-    us = {"rhs_jacobian": _fastest(_loop_rhs, (y, th, km, op, ws, True), reps, batches),
-          "rhs": _fastest(_loop_rhs, (y, th, km, op, ws, False), reps, batches),
-          "first_stage": _fastest(_loop_first_stage, (y, th, km, op, ws, integrals, h), reps, batches)}
+    dth = omega * h                    # each call one output step on: the table rows a revolution reads
+    us = {"rhs_jacobian": _fastest(_loop_rhs, (y, th, dth, km, op, ws, True), reps, batches),
+          "rhs": _fastest(_loop_rhs, (y, th, dth, km, op, ws, False), reps, batches),
+          "first_stage": _fastest(_loop_first_stage, (y, th, dth, km, op, ws, integrals, h), reps, batches)}
     acc = counts["substeps"] / counts["steps"]
     rej = counts["rejected_substeps"] / counts["steps"]
     us["ros2_step"] = _fastest(_loop_ros2_step, (y, th, h * min(1.0, 1.0 / acc), km, op, ws), reps, batches)
     us["lu"] = _fastest(_loop_lu, (h / acc, ws), reps, batches)
-    us["contact"] = _fastest(_loop_contact, (th, ex, ey, km, ws), reps, batches)
-    us["linearise"] = _fastest(_loop_linearise, (th, h, ex, ey, 0, km, op, ws), reps, batches)
+    us["contact"] = _fastest(_loop_contact, (th, dth, ex, ey, km, ws), reps, batches)
+    us["linearise"] = _fastest(_loop_linearise, (th, dth, h, ex, ey, 0, km, op, ws), reps, batches)
     per_step = 1e6 * best / counts["steps"]
     return {"chambers": km.pc.n, "rpm": rpm, "bar": bar, "model": model, "us_per_call": us,
             "us_per_output_step": per_step, "accepted_per_step": acc, "rejected_per_step": rej,
