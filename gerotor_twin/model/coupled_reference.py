@@ -51,6 +51,9 @@ __all__ = ["coupled_rhs", "coupled_revolution", "RELAXATION_DEG"]
 
 #: τ of the contact's relaxation as a shaft angle [deg] (τ = this / ω): far below the output step of 1.5°.
 RELAXATION_DEG = 0.005
+#: Gap [m] within which two lobes share the contact force of Eq. (26) (:func:`_handover_load`): far below any
+#: clearance (µm), far above the round-off of a gap held at zero (1e-15 m).
+HANDOVER_M = 1e-9
 
 
 @njit
@@ -61,6 +64,29 @@ def _gap_rate(tab, delta, theta, omega, ex, ey, k, c):
     gp = gap_value(c, delta, ex, ey, 0.0)
     gap_coefficients(tab, theta - d, k, c)
     return (gp - gap_value(c, delta, ex, ey, 0.0)) / (2.0 * d) * omega
+
+
+@njit
+def _handover_load(pres, theta, omega, ex, ey, kc, k1, k2, g1, g2, km):
+    """Load [N] of Eqs. (24)–(27) with the contact force of Eq. (26) shared by the two lobes nearest contact.
+
+    Eq. (26) puts the driving torque on one lobe, the one with the smallest gap (``kc``).  Where two lobes are
+    within :data:`HANDOVER_M` of contact (the gear wedged between two teeth, both gaps held at zero) that choice
+    is round-off's, and the load jumps with it: the right-hand side is discontinuous and Radau stalls (07 at
+    1650 rpm / 27.5 bar, 237° of the second revolution: a 1e-15 m move switched the lobe and changed ė by
+    4 mm/s).  Here the two lobes' loads are weighted by w_k ∝ 1 − g_k/ε (g_k clipped to [0, ε], ε =
+    :data:`HANDOVER_M`): equal halves at equal gaps, the nearer lobe alone once the other is ε open, so the load
+    is continuous in e.  Outside ε of contact it is Eq. (26) with ``kc`` as in the twin.
+    """
+    w1 = 1.0 - min(max(g1, 0.0), HANDOVER_M) / HANDOVER_M
+    w2 = 1.0 - min(max(g2, 0.0), HANDOVER_M) / HANDOVER_M
+    if w1 + w2 <= 0.0 or w2 <= 0.0:
+        fx, fy, _fc, _unl = outer_gear_load(pres, theta, omega, ex, ey, kc if w1 <= 0.0 else k1, km)
+        return fx, fy
+    ax, ay, _fc, _unl = outer_gear_load(pres, theta, omega, ex, ey, k1, km)
+    bx, by, _fc, _unl = outer_gear_load(pres, theta, omega, ex, ey, k2, km)
+    s = w1 / (w1 + w2)
+    return s * ax + (1.0 - s) * bx, s * ay + (1.0 - s) * by
 
 
 @njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
@@ -78,14 +104,14 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     theta = theta0 + op.omega * t
     _x, _y, _gam, kc = contact(tab, n, pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat, bool(False))
     to_pressures(y, km, ws.pres)
-    fx, fy, _fc, _unl = outer_gear_load(ws.pres, theta, op.omega, ex, ey, kc, km)    # Eqs. (24)-(27)
+    k1, k2, g1, g2 = two_smallest(ws.cmat, pc.tip_clearance, ex, ey)
+    fx, fy = _handover_load(ws.pres, theta, op.omega, ex, ey, kc, k1, k2, g1, g2, km)      # Eqs. (24)-(27)
     bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
     omega2 = op.omega * (n - 1) / n
     d = load_step(fx, fy)
     vx, vy = mobility_kernel(ex, ey, fx, fy, omega2, bp)
     v1x, v1y = mobility_kernel(ex, ey, fx + d, fy, omega2, bp)
     v2x, v2y = mobility_kernel(ex, ey, fx, fy + d, omega2, bp)
-    k1, k2, g1, g2 = two_smallest(ws.cmat, pc.tip_clearance, ex, ey)
     c = np.empty(10)                                  # an offline reference: it may allocate
     r1 = _gap_rate(tab, pc.tip_clearance, theta, op.omega, ex, ey, k1, c)
     r2 = _gap_rate(tab, pc.tip_clearance, theta, op.omega, ex, ey, k2, c)
@@ -101,6 +127,19 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
         out[i] = ws.f0[i]
     out[n1] = vx
     out[n1 + 1] = vy
+
+
+def _system(model, op, theta0: float, tau: float):
+    """The coupled system's right-hand side f(t, z) with θ = θ₀ + ωt [rad], and Radau's absolute tolerances."""
+    n, out = model.N, np.empty(model.N + 3)
+
+    def f(t, zz):
+        coupled_rhs(t, zz, theta0, tau, model.kernel, op, model._ws, out)
+        return out.copy()
+    atol = np.full(n + 3, 1e-9)
+    atol[n] = 1e-12
+    atol[n + 1:] = 1e-11
+    return f, atol
 
 
 def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 2, rtol: float = 1e-7,
@@ -123,6 +162,12 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     (dict, ndarray)
         The recorded revolution at the twin's output angles, as the fields of :class:`.accuracy.Revolution`
         (θ [rad], chamber pressures [Pa], delivery flow [m³/s], η [-], mean flow [m³/s], peak [Pa]), and e [m] there.
+
+    Notes
+    -----
+    Each revolution starts where the one before ended, at θ₀ + 2πk: a chamber's tables repeat with the chamber
+    period 2πN/(N − 1), not with the shaft's 2π, so after one shaft revolution each chamber stands where its
+    neighbour stood one revolution before (the chamber labels of :meth:`.accuracy.Revolution.at`).
     """
     from scipy.integrate import solve_ivp
 
@@ -138,20 +183,16 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     tau = math.radians(RELAXATION_DEG) / omega
     z = np.concatenate([state.log_density, state.eccentricity]).astype(float)
     z[n] = 0.0
-    out = np.empty(n + 3)
-
-    def f(t, zz):
-        coupled_rhs(t, zz, state.theta, tau, km, op, ws, out)
-        return out.copy()
-    atol = np.full(n + 3, 1e-9)
-    atol[n] = 1e-12
-    atol[n + 1:] = 1e-11
+    theta0 = float(state.theta)
     with np.errstate(over="ignore"):        # scipy's finite-difference Jacobian grows its increments past 1e308
         for _ in range(revolutions - 1):
+            f, atol = _system(model, op, theta0, tau)
             z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
             z[n] = 0.0
+            theta0 += 2.0 * math.pi                                    # the next revolution starts here
     m = max(1, int(math.ceil(period / model.step_size(omega) - 1e-9)))     # the twin's output steps (advance)
     t_fine = np.linspace(0.0, period, m * samples_per_step + 1)
+    f, atol = _system(model, op, theta0, tau)
     with np.errstate(over="ignore"):
         sol = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
     fine = sol.sol(t_fine)
@@ -168,6 +209,6 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     eta = float(sol.y[n, -1] / (qth * period))
     edge = EdgeLosses.of(cfg, model.displacement)
     q = eta * qth - edge.flow(omega, p_d, op.p_s)
-    rev = dict(theta=state.theta + omega * t_fine[pick], chamber_pressures=p_fine[pick], delivery_flow=q_fine[pick],
+    rev = dict(theta=theta0 + omega * t_fine[pick], chamber_pressures=p_fine[pick], delivery_flow=q_fine[pick],
                volumetric_efficiency=q / qth, mean_delivery_flow=q, peak_pressure=float(p_fine.max()))
     return rev, fine[n + 1:, pick].T
