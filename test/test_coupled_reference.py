@@ -133,9 +133,9 @@ def test_each_revolution_of_the_reference_starts_where_the_last_ended(setup, mon
     """Closed form: a chamber's tables repeat with the chamber period 2πN/(N − 1), not with 2π, so the settling
     revolutions and the recorded one must run at θ₀ + 2πk, k = 0, 1, …: with the right-hand side stubbed (ż = 0,
     the angles it is called at recorded) the calls cover [θ₀, θ₀ + 2π·revolutions] once, and the recorded
-    revolution's samples are at θ₀ + 2π(revolutions − 1) + ωh·(1, 2, …).  (Every revolution starting again at θ₀
-    left the chambers one position off after the first: on 07 at 1650 rpm / 27.5 bar the reference's first
-    samples were 16 bar off the twin's and its RMS 1.13 % of the range against it, 2026-12-06.)"""
+    revolution's samples are at θ₀ + 2π(revolutions − 1) + ωh·(1, 2, …).  (A revolution restarted at θ₀ puts
+    every chamber one position off: on 07 at 1650 rpm / 27.5 bar its first samples then differ from the twin's
+    by 16 bar, its RMS against the twin 1.13 % of the range instead of 0.25 %, measured 2026-12-06.)"""
     _cfg, m, inp, op, _tau, state = setup
     seen = []
 
@@ -191,9 +191,9 @@ def test_two_lobes_at_contact_share_the_contact_force(setup):
 
 
 def test_the_reference_is_continuous_where_the_gear_is_wedged(setup):
-    """Behaviour: at a position where two lobes touch, moves of 1e-15 m (round-off) change ė by less than 1 µm/s;
-    with the contact force on whichever lobe round-off made the smaller gap they changed it by millimetres per
-    second, and Radau stalled there (07 at 1650 rpm / 27.5 bar, 2026-12-06)."""
+    """Behaviour: at a position where two lobes touch, moves of 1e-15 m (round-off) change ė by less than 1 µm/s.
+    With the contact force on whichever lobe round-off makes the smaller gap they change it by millimetres per
+    second (6 mm/s here), and Radau stalls at such a wedge (07 at 1650 rpm / 27.5 bar, 237°, measured 2026-12-06)."""
     _cfg, m, _inp, op, tau, state = setup
     e, _k1, _k2 = _wedged(m, state.theta, state.eccentricity)
     _z, base = _rhs(m, op, tau, state, e)

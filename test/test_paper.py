@@ -146,8 +146,8 @@ def test_pressure_changes_the_tooth_gap_more_at_high_speed(cfg):
     2026-12-05 with the default ``gear_coupling: constrained``: 6.25 µm at 3000 rpm against 6.44 µm
     at 1000 rpm.  Over one revolution at the same shaft angles the coupled reference
     (``model/coupled_reference.py``: Radau on pressures and gear together, independent of the
-    twin's time discretisation and contact scheme) gives 6.47 against 6.88 µm, the constrained twin
-    6.10 against 6.04 µm; ``stages``, whose gear the overlap check pulled back after every step,
+    twin's time discretisation and contact scheme) gives 5.82 against 5.96 µm, the constrained twin
+    5.95 against 6.02 µm (2026-12-06); ``stages``, whose gear the overlap check pulled back after every step,
     gave 3.75 against 1.85 µm, the paper's ratio, from that artefact (its mean position 1–2 µm from
     the coupled reference's, the constrained twin's within 0.2 µm)."""
     from gerotor_twin.model.pump import PumpModel
