@@ -125,3 +125,24 @@ def test_a_reference_does_not_depend_on_the_pressure_measures_settings(cfg):
         runs.append((s.log_density, out.chamber_peak_pressures, s.counters))
     for a, b in zip(*runs):
         assert np.array_equal(a, b)
+
+
+def test_a_coupled_reference_is_keyed_by_what_it_reads(cfg):
+    """Behaviour: the coupled reference reads of the numerics only the tables' resolution and the output step (its
+    sample angles), so its key ignores the twin's step control (tolerance, error measure, closing tolerance, gear
+    scheme, work bound) and changes with either of those two.  That the reference forgets the twin state it starts
+    from is measured, not tested (minutes per revolution): docs/numerics.md."""
+    from gerotor_twin.model.accuracy import coupled_key_config
+
+    def numerics(c, **kw):
+        return dataclasses.replace(c, numerics=dataclasses.replace(c.numerics, **kw))
+
+    def key(c):
+        return RC.reference_key(coupled_key_config(c), 3000.0, 27.5, "mobility-coupled")
+    k = key(cfg)
+    assert key(numerics(cfg, tolerance=0.1, error_measure="log_density", closing_tolerance=0.5,
+                        log_density_tolerance=1e-2, gear_coupling="stages", max_substep_attempts=50)) == k
+    assert key(numerics(cfg, max_step_deg=0.75)) != k
+    assert key(numerics(cfg, max_step_s=1e-4)) != k
+    assert key(numerics(cfg, table_points=1024)) != k
+    assert key(dataclasses.replace(cfg, clearances=dataclasses.replace(cfg.clearances, tooth_tip_m=2e-5))) != k

@@ -53,7 +53,7 @@ from .pump import PumpModel
 from .steady import reference_config, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
-__all__ = ["accuracy", "compare", "coupled_comparison", "Revolution", "reference_revolution", "print_accuracy",
+__all__ = ["accuracy", "compare", "coupled_comparison", "coupled_key_config", "Revolution", "reference_revolution", "print_accuracy",
            "within_budget", "reference_numerics", "reference_check", "BUDGET"]
 
 #: The error budget of the default numerics, one for every pump: RMS chamber-pressure error ≤ 1 % of the
@@ -236,11 +236,25 @@ def accuracy(cfg, rpm: float = 3000.0, bar: float = 27.5, model: str = "mobility
     return row
 
 
+def coupled_key_config(cfg):
+    """The configuration that keys a cached coupled reference: ``cfg`` with the twin's step-control settings at
+    their defaults.  The reference reads of the numerics only the tables' resolution (``table_points``) and the
+    output step (``max_step_deg``, ``max_step_s``: its sample angles); the rest shapes only the twin's periodic
+    state it starts from, which its settling revolution forgets (docs/numerics.md, "The family against the coupled
+    reference"), so an A/B of the twin's step control reruns only the twin."""
+    from dataclasses import replace
+
+    from ..config import Numerics
+    n = cfg.numerics
+    return replace(cfg, numerics=replace(Numerics(), table_points=n.table_points, max_step_deg=n.max_step_deg,
+                                         max_step_s=n.max_step_s))
+
+
 def coupled_comparison(cfg, rpm: float, bar: float, twin: Revolution, state, cache=None) -> dict:
     """The budget figures of the twin's revolution against the coupled reference (:mod:`.coupled_reference`:
     pressures and gear position integrated together by Radau), started from ``state`` [rpm, bar gauge]."""
     from .reference_cache import cached_revolution, reference_key
-    key = reference_key(cfg, rpm, bar, "mobility-coupled") if cache is not None else ""
+    key = reference_key(coupled_key_config(cfg), rpm, bar, "mobility-coupled") if cache is not None else ""
     rev, _ = cached_revolution(cache, key, lambda: Revolution(**coupled_revolution(PumpModel(cfg, "mobility"), rpm,
                                                                                      bar, state)[0]), Revolution.load)
     p_atm = cfg.fluid.atmospheric_pa
