@@ -45,7 +45,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import numpy as np
 
 from .coupled_reference import coupled_revolution
@@ -53,8 +53,8 @@ from .pump import PumpModel
 from .steady import reference_config, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
-__all__ = ["accuracy", "compare", "coupled_comparison", "coupled_key_config", "Revolution", "reference_revolution", "print_accuracy",
-           "within_budget", "reference_numerics", "reference_check", "BUDGET"]
+__all__ = ["accuracy", "compare", "coupled_comparison", "coupled_key_config", "Revolution", "reference_revolution",
+           "print_accuracy", "within_budget", "reference_numerics", "reference_check", "BUDGET"]
 
 #: The error budget of the default numerics, one for every pump: RMS chamber-pressure error ≤ 1 % of the
 #: reference waveform's range, |peak error| ≤ 2 % of the reference peak (gauge), |η error| ≤ 0.3 % relative,
@@ -242,8 +242,6 @@ def coupled_key_config(cfg):
     output step (``max_step_deg``, ``max_step_s``: its sample angles); the rest shapes only the twin's periodic
     state it starts from, which its settling revolution forgets (docs/numerics.md, "The family against the coupled
     reference"), so an A/B of the twin's step control reruns only the twin."""
-    from dataclasses import replace
-
     from ..config import Numerics
     n = cfg.numerics
     return replace(cfg, numerics=replace(Numerics(), table_points=n.table_points, max_step_deg=n.max_step_deg,

@@ -80,7 +80,7 @@ def _handover_load(pres, theta, omega, ex, ey, kc, k1, k2, g1, g2, km):
     """
     w1 = 1.0 - min(max(g1, 0.0), HANDOVER_M) / HANDOVER_M
     w2 = 1.0 - min(max(g2, 0.0), HANDOVER_M) / HANDOVER_M
-    if w1 + w2 <= 0.0 or w2 <= 0.0:
+    if w2 <= 0.0:                                   # the second lobe ε open: one lobe carries it
         fx, fy, _fc, _unl = outer_gear_load(pres, theta, omega, ex, ey, kc if w1 <= 0.0 else k1, km)
         return fx, fy
     ax, ay, _fc, _unl = outer_gear_load(pres, theta, omega, ex, ey, k1, km)
