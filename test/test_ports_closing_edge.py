@@ -32,6 +32,30 @@ def test_dead_centres_closed_form(cfg):
     assert tmin == pytest.approx((math.pi - math.pi / N) * N / (N - 1), abs=1e-12)
 
 
+def _five_chambers(cfg, eccentricity_m):
+    """The default gear set with five chambers at ``eccentricity_m`` [m], ports from the geometry."""
+    raw = cfg.to_dict()
+    raw["gears"].update(chambers=5, eccentricity_m=eccentricity_m)
+    raw["ports"] = {"timing": "geometry", "suction": {"closing_edge": "chamber"}, "delivery": {}}
+    return parse_config(raw, source="five chambers")
+
+
+@pytest.mark.parametrize("eccentricity_m", [3.5e-3, 4.0e-3])
+def test_dead_centres_closed_form_where_the_rate_vanishes_on_a_sample(cfg, eccentricity_m):
+    """Closed form (as above) for N = 5, whose dead centres (45° before the period's end, 180°) lie on samples of the
+    721-point search grid over the period of 450°; on these gear sets dA/dθ comes out exactly 0.0 there, and both
+    dead centres were once taken for the maximum, which made a valid gear set's geometric kidneys invalid (a
+    suction port spanning 325°, refused by the config's check).  The kidneys from the geometry span less than
+    180° each."""
+    c = _five_chambers(cfg, eccentricity_m)
+    g = ideal(c.gears)
+    tmax, tmin = dead_centres(g)
+    assert tmax == pytest.approx((-math.pi / 5 * 5 / 4) % g.chamber_period, abs=1e-12)
+    assert tmin == pytest.approx((math.pi - math.pi / 5) * 5 / 4, abs=1e-12)
+    for port in (c.suction_port, c.delivery_port):
+        assert 0.0 < port.end - port.start < math.pi, port
+
+
 def test_chamber_edge_closes_exactly_at_the_dead_centre_and_linearly_before(setup):
     """Behaviour: the open area is 0 at the maximum-volume dead centre (the chamber then fills the cut),
     and falls linearly to it (twice the angle, twice the area), where the ray edge closes like a cusp."""

@@ -194,12 +194,28 @@ def dead_centres(g) -> tuple[float, float]:
     from scipy.optimize import brentq
     period = g.chamber_period
     th = np.linspace(0.0, period, 721)
-    rate = chamber_dA_dtheta_closed_form(g, th, 0)
+    sign = np.sign(chamber_dA_dtheta_closed_form(g, th, 0))
     found = {}
-    for i in np.nonzero(np.sign(rate[:-1]) != np.sign(rate[1:]))[0]:
-        root = brentq(lambda t: float(chamber_dA_dtheta_closed_form(g, t, 0)), th[i], th[i + 1], xtol=1e-14)
-        found["max" if rate[i] > 0 else "min"] = root % period
+    for i in range(len(th) - 1):
+        if sign[i + 1] == 0 or sign[i] == sign[i + 1]:
+            continue                         # no sign change, or the root is the sample th[i + 1]: the next i
+        if sign[i] != 0:
+            root = brentq(lambda t: float(chamber_dA_dtheta_closed_form(g, t, 0)), th[i], th[i + 1], xtol=1e-14)
+        elif _sign_before(sign, i) != sign[i + 1]:
+            root = th[i]                     # the rate is exactly zero on a sample (N = 3, 5, 9: both dead centres are)
+        else:
+            continue                         # it touches zero there without changing sign
+        found["max" if sign[i + 1] < 0 else "min"] = root % period
     return found["max"], found["min"]
+
+
+def _sign_before(sign: np.ndarray, i: int) -> float:
+    """The last non-zero sign before sample i of a periodic sampling whose last sample repeats the first."""
+    for k in range(1, len(sign)):
+        j = (i - k) % (len(sign) - 1)
+        if sign[j] != 0:
+            return sign[j]
+    return 0.0
 
 
 def _angle_of(poly: np.ndarray) -> float:
