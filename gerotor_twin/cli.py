@@ -66,9 +66,6 @@ def cmd_geometry(args) -> int:
     print(f"Gerotor {g.chambers}/{g.chambers - 1} from {cfg.source}")
     for k, v in info.items():
         print(f"  {k:32s} {v}")
-    short = {k: v for k, v in info.items() if k.endswith("margin_deg") and v < -1e-6}
-    for k, v in short.items():
-        print(f"  warning: {k} = {v} deg: a chamber is open to both ports there (docs/pumps.md)", file=sys.stderr)
     print(f"  displacement                     {info['displacement_m3_per_rev'] * 1e6:.3f} cm³/rev")
     if args.json:
         _write_json(args.json, info)

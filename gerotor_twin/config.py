@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 from .errors import InputError, check_range
 from .geometry.gerotor import GerotorGeometry
-from .geometry.ports import FACES_MAX, NOTCH_SHAPES, Notch, Port, geometry_port_angles, sealing_lands
+from .geometry.ports import FACES_MAX, NOTCH_SHAPES, Notch, Port, geometry_port_angles, port_timing, sealing_lands
 from .config_notes import drop_removed_keys, far_from_default
 from .config_oil import (DEFAULT_REFERENCE_TEMPERATURE_K, OIL_SET_FLUID_KEYS, fluid_at, fluid_with_oil,
                          oil_to_dict, parse_air, parse_fluid_model, parse_oil)
@@ -397,7 +397,8 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
                       air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
                       micro_motion=_micro_motion(raw), displacement_factor=k_d, bypass_area_m2=a_b,
                       calibration=_calibration_block(raw.get("calibration")),
-                      notes=tuple(notes + far_from_default("numerics", ns, num)))
+                      notes=tuple(notes + far_from_default("numerics", ns, num)
+                                  + _bridge_notes(gears, ports["suction"], ports["delivery"])))
 
 
 def _micro_motion(raw: dict) -> MicroMotion:
@@ -467,6 +468,34 @@ def _ports(raw: dict, gears: GerotorGeometry) -> dict[str, Port]:
              for name in ("suction", "delivery")}
     _check_ports(ports["suction"], ports["delivery"])
     return ports
+
+
+#: a sealing land or relief groove may reach this far past the chamber at its dead centre before it is named [deg]
+#: (the kidneys of ``timing: geometry`` sit on it to round-off; angles given to 0.01° within 0.01°)
+BRIDGE_TOLERANCE_DEG = 0.05
+
+_DEAD_CENTRE = {"land_margin_max": "maximum", "land_margin_min": "minimum"}
+
+
+def _bridge_notes(gears: GerotorGeometry, suction: Port, delivery: Port) -> list[str]:
+    """One note per sealing land or relief groove through which the chamber at a dead centre sees both kidneys
+    (:func:`~gerotor_twin.geometry.ports.port_timing`'s margin below −:data:`BRIDGE_TOLERANCE_DEG`): a leak path
+    from delivery to suction through the chamber, legal but rarely meant (kidney angles taken from another gear
+    set, say)."""
+    out = []
+    for key, margin in port_timing(gears, suction, delivery).items():
+        deg = math.degrees(margin)
+        if deg >= -BRIDGE_TOLERANCE_DEG:
+            continue
+        if key in _DEAD_CENTRE:
+            out.append(f"ports: the land at the {_DEAD_CENTRE[key]}-volume dead centre is {-deg:.2f} deg narrower than "
+                       f"the chamber there, which opens the delivery kidney to the suction kidney (a leak path through "
+                       f"the chamber); ports.timing: geometry makes each land the chamber's width")
+        else:
+            port, edge = key.split("_")[:2]
+            out.append(f"ports.{port}.{edge}_notch: its tip reaches {-deg:.2f} deg past the chamber at the dead centre, "
+                       f"which is still open to the other kidney (a leak path through the groove)")
+    return out
 
 
 def _notch(sec, field: str, gears: GerotorGeometry, port: str, edge: str) -> Notch:

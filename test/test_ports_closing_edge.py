@@ -56,6 +56,26 @@ def test_dead_centres_closed_form_where_the_rate_vanishes_on_a_sample(cfg, eccen
         assert 0.0 < port.end - port.start < math.pi, port
 
 
+def test_a_land_or_groove_that_bridges_the_kidneys_is_named_when_loaded(cfg):
+    """Behaviour: kidney angles written for the default seven-chamber set, kept on a five-chamber one (a user's first
+    try), leave the chamber at each dead centre open to both kidneys; the config loads and says so in one note per
+    land with the shortfall (18.87° at the maximum-volume dead centre, 26.09° at the minimum, from the
+    geometry's own port_timing); a relief groove whose tip runs past the dead-centre chamber is named too; the
+    default pump, whose lands are the chamber's width, and the same five-chamber set with ``timing: geometry``
+    load without such a note."""
+    raw = cfg.to_dict()
+    raw["gears"].update(chambers=5, eccentricity_m=4.0e-3)
+    notes = [n for n in parse_config(raw, source="five").notes if n.startswith("ports")]
+    assert len(notes) == 2, notes
+    assert "maximum-volume dead centre is 18.87 deg narrower" in notes[0]
+    assert "minimum-volume dead centre is 26.09 deg narrower" in notes[1]
+    grooved = cfg.to_dict()
+    grooved["ports"]["delivery"]["opening_notch"] = {"length_deg": 10.0, "width_m": 1e-3, "depth_m": 1e-3}
+    assert [n.split(":")[0] for n in parse_config(grooved, source="groove").notes] == ["ports.delivery.opening_notch"]
+    assert not [n for n in cfg.notes if n.startswith("ports")]
+    assert not [n for n in _five_chambers(cfg, 4.0e-3).notes if n.startswith("ports")]
+
+
 def test_chamber_edge_closes_exactly_at_the_dead_centre_and_linearly_before(setup):
     """Behaviour: the open area is 0 at the maximum-volume dead centre (the chamber then fills the cut),
     and falls linearly to it (twice the angle, twice the area), where the ray edge closes like a cusp."""
