@@ -229,3 +229,22 @@ def test_reference_point_capped_at_the_pumps_range(cfg):
     mon = HealthMonitor(PumpModel(small, "fixed"), HealthSettings())
     assert (mon.settings.reference_rpm, mon.settings.reference_bar) == (1200.0, 6.0)
     assert 0.0 < mon.loss_ref < mon.qth_ref
+
+
+def test_the_reference_point_and_the_startup_check_leave_the_live_model_as_it_is(fixed_model):
+    """Behaviour: the health monitor's reference point and clearance exponent (a steady run, the clearances scaled
+    and back) and the start-up real-time check (revolutions at the range's extremes) run on a replica sharing the
+    tables; the twin's model keeps its kernel, config, temperature and every workspace array bit for bit, so only
+    the twin's own steps write it."""
+    import numpy as np
+    from gerotor_twin.twin import TwinCore, TwinSettings
+    m = fixed_model
+    kernel, config, temp = m.kernel, m.config, m.temperature_k
+    ws = {f: np.array(getattr(m._ws, f), copy=True) for f in m._ws._fields}
+    core = TwinCore(m, TwinSettings())
+    assert core.health is not None and math.isfinite(core.health.loss_ref)
+    core.measure_startup_rtf(0.5, budget_s=0.3)
+    assert m.kernel is kernel and m.config is config and m.temperature_k == temp
+    for f, before in ws.items():
+        assert np.array_equal(getattr(m._ws, f), before, equal_nan=True), f
+    assert m.replica().tables is m.tables

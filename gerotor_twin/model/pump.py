@@ -104,6 +104,13 @@ class PumpModel:
         self._move = {"fixed": K.MOVE_FIXED, "mobility": K.MOVE_MOBILITY}.get(bearing, K.MOVE_EXTERNAL)
         self._announced = False                # _first_use
 
+    def replica(self) -> "PumpModel":
+        """A model of the same pump (its config as it is now), gear model and bearing options with its own workspace
+        and kernel, sharing the geometry tables (a few ms): for work that must leave this model as it is — the health
+        monitor's reference point, the node's start-up real-time check — so that only the twin's own ``advance``
+        calls write this model."""
+        return PumpModel(self.config, self.bearing_name, self._bearing_options, tables=self.tables)
+
     def _make_bearing(self, mu: float) -> None:
         g = self.geometry
         self.bearing_geometry = BearingGeometry(length_m=g.width, diameter_m=2 * g.outer_radius,

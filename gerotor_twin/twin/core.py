@@ -294,7 +294,8 @@ class TwinCore:
         if threshold == 0:
             self.startup_rtf = None
             return None
-        res = self.startup_rtf = measure_rtf(self.model, threshold, chunk_s=self.settings.sample_period_s, **kwargs)
+        res = self.startup_rtf = measure_rtf(self.model.replica(), threshold, chunk_s=self.settings.sample_period_s,
+                                             **kwargs)       # the same pump and kernel; the live model untouched
         if res.below:
             self._events.report("model", "startup_rtf", 1, res.message(), 0)
         return res

@@ -276,8 +276,9 @@ class HealthMonitor:
                                     reference_bar=min(s.reference_bar, rng.max_delivery_bar))
         self.base_config = model.config
         self.k_applied = 1.0
-        self.loss_ref, self.qth_ref = reference_loss(model, s) if s.enabled else (math.nan, math.nan)
-        self.exponent = clearance_exponent(model, s) if s.enabled else 3.0
+        ref = model.replica() if s.enabled else None     # the live model is written by the twin's steps only
+        self.loss_ref, self.qth_ref = reference_loss(ref, s) if s.enabled else (math.nan, math.nan)
+        self.exponent = clearance_exponent(ref, s) if s.enabled else 3.0
         self.est = lf.LeakageEstimate(var=s.initial_sd ** 2)
         self.eta_rmse_cal = calibration_eta_rmse(model.config)
         self._flow = FlowSamples()
