@@ -168,7 +168,7 @@ class Numerics:
     ``"log_density"``: the absolute error of ln(ρ/ρ₀) at most ``tolerance`` everywhere
     (5e-5 ≈ 75 kPa in the liquid, 75 Pa below p_atm).
     ``closing_tolerance`` multiplies ``tolerance`` for a chamber whose delivery port closes within
-    four output steps (linear extrapolation of its open area) or opened within the last one: the
+    eight output steps (linear extrapolation of its open area) or opened within the last one: the
     pressure spikes of the throttled, compressed chamber and of a chamber refilled from the delivery
     kidney form there, and the embedded error estimate under-reads them (default 0.15; 1: no change;
     pressure measure only).  ``rate_fraction`` and ``top_tolerance`` of older pump files are ignored

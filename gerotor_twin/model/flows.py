@@ -281,7 +281,7 @@ def closing_ports(pc, op, p, rho, geo, jac, horizon):
     """Move the shares of the ports that close within ``horizon`` [s] out of ∂f/∂t (``jac`` after
     :func:`rhs` with the Jacobian) into their own columns, with their time to close (``J_*``), for
     :func:`closing_share`.  The time to close is the linear extrapolation A / (−ω dA/dθ) (:func:`time_to_close`);
-    ``horizon`` must be at least the longest sub-step (the stepper passes 4 output steps).  What the step
+    ``horizon`` must be at least the longest sub-step (the stepper passes 8 output steps).  What the step
     control makes of closing and opening ports is its own (:func:`.step_control.port_event`).
 
     A port is closing where its open area falls (table slope < 0).  Its share is recomputed from the

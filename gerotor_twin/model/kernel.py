@@ -17,7 +17,7 @@ Without f_t a stiff chamber on a moving quasi-equilibrium (an opening or
 closing port) lags it by ≈ 0.71 of its movement per sub-step (docs/numerics.md).
 A port that closes during the sub-step would, linearised, keep closing through
 zero area: its share of f_t is scaled by min(1, t_c/h), t_c its time to close
-(:func:`.flows.closing_ports`).  A chamber whose delivery port closes within four output
+(:func:`.flows.closing_ports`).  A chamber whose delivery port closes within eight output
 steps (or opened within the last one) has its error tolerance multiplied by
 ``numerics.closing_tolerance``: the pressure spike of the throttled, compressed
 chamber forms there (and that of a chamber refilled from the delivery kidney), and
@@ -92,7 +92,7 @@ MOVE_FIXED, MOVE_MOBILITY, MOVE_EXTERNAL = 0, 1, 2
 
 _DENSE_W = 1.0 / (1.0 - 2.0 * GAMMA)     # ROS2's continuous extension (_track_peak)
 #: output steps ahead in which a closing port is treated as closing (its ∂f/∂t share, its tolerance)
-CLOSING_HORIZON = 4.0
+CLOSING_HORIZON = 8.0
 
 
 # ------------------------------------------------------------ linear algebra

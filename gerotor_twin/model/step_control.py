@@ -49,7 +49,8 @@ SAFETY = 0.9        #: on the factor that would put the next error norm at exact
 FACTOR_MIN = 0.2    #: smallest factor per sub-step; also after a non-finite error norm [-]
 FACTOR_MAX = 4.0    #: largest factor per sub-step [-]
 _TINY_NORM = 1e-8   #: below this the error norm says nothing about the step: grow by FACTOR_MAX
-OPENED_WINDOW = 0.25  #: a delivery port counts as just opened within this share of the closing horizon [-]
+OPENED_WINDOW = 0.125  #: a delivery port counts as just opened within this share of the closing horizon [-] (one
+                       #: output step of the stepper's eight, ``kernel.CLOSING_HORIZON``)
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)             #: ROS2's γ [2]
 #: ROS2's continuous extension y(t + sh) = y + h(b₁(s)k₁ + b₂(s)k₂), b₂(s) = (s²/2 − γs)/(1 − 2γ), b₁ = s + b₂
 #: ([1] II, IV.7; ``kernel._track_peak``), differentiated at s = 1: its rate at the sub-step's end is
