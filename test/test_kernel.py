@@ -14,7 +14,7 @@ from gerotor_twin.hydraulics.state_equation import log_density_of, pressure_of
 from gerotor_twin.model import flows as F
 from gerotor_twin.model import kernel as K
 from gerotor_twin.model import step_control as SC
-from gerotor_twin.model.params import operating
+from gerotor_twin.model.params import CT_GEO_OK, CT_GEO_THETA, operating
 from gerotor_twin.model.pump import Inputs, PumpModel
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -142,6 +142,42 @@ def test_time_derivative_matches_finite_differences_in_shaft_angle(warm):
         m._ws.disp[:] = disp
     assert edges, "no angle with a port edge (open area < 5 % of its maximum) was checked"
     assert closing, "no closing port was checked"
+
+
+def test_the_tables_are_read_once_per_angle_and_never_stale(warm):
+    """Behaviour: the right-hand side keeps the geometry tables' values of the angle it last read in ``ws.geo`` (a
+    sub-step's second stage and the next first stage are at one angle: ``flows.chamber_geometry``). After a
+    revolution of output steps they are the last first stage's, bit for bit what a fresh read gives; at another
+    angle, with another table at the same angle, or with the gear moved, the right-hand side gives what a fresh
+    read gives, never the kept values."""
+    m, inp, s = warm
+    op = operating(m.kernel, inp.omega, inp.p_suction, inp.p_delivery)
+    ws = m._ws
+    s, _ = m.advance(s, 2 * math.pi / inp.omega, inp)
+    assert ws.ctrl[CT_GEO_OK] == 1.0 and ws.ctrl[CT_GEO_THETA] == s.theta
+    gaps = m.gaps(s.theta, s.eccentricity)[0]
+
+    def fresh(theta, km):
+        ws.ctrl[CT_GEO_OK] = 0.0
+        out = _rhs(m, op, s.log_density, theta, gaps, km)[0]
+        return out, ws.geo.copy()
+
+    kept = ws.geo.copy()
+    f_fresh, geo_fresh = fresh(s.theta, m.kernel)
+    assert np.array_equal(kept, geo_fresh)
+    other = m.kernel._replace(tab=m.kernel.tab._replace(rows=m.kernel.tab.rows * 1.01))
+    cases = [(s.theta + 1e-3, m.kernel, None), (s.theta, other, None), (s.theta, m.kernel, 1e-6)]
+    for theta, km, move in cases:
+        fresh(s.theta, m.kernel)                            # the kept values: those of s.theta, m's tables
+        if move is not None:
+            ws.disp[0] += move
+        f, _j, _t = _rhs(m, op, s.log_density, theta, gaps, km)
+        got = ws.geo.copy()
+        f_ref, geo_ref = fresh(theta, km)
+        assert np.array_equal(got, geo_ref) and np.array_equal(f, f_ref)
+        assert not np.array_equal(f, f_fresh)
+        if move is not None:
+            ws.disp[0] -= move
 
 
 def test_closing_port_share_stops_at_the_closing_angle(warm):

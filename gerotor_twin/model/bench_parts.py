@@ -66,7 +66,7 @@ def _loop_first_stage(y, th, dth, km, op, ws, integrals, big_h, reps):
 def _loop_ros2_step(y, th, h, km, op, ws, reps):
     en = 0.0
     for _ in range(reps):
-        en += K.ros2_step(y, th, h, km, op, ws)
+        en += K.ros2_step(y, th + op.omega * h, h, km, op, ws)
     return en
 
 

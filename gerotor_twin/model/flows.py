@@ -15,7 +15,7 @@ alongside, exactly: ∂Q/∂p · β(p) / V and the derivatives of the density
 ratios (:func:`transfer`).
 
 The parts, each a function of its own: :func:`chamber_geometry` (table rows of
-every chamber), :func:`volume_states` (p, β, ρ of every volume),
+every chamber, read once per angle: :func:`table_geometry`), :func:`volume_states` (p, β, ρ of every volume),
 :func:`transfer` (one flow between two volumes),
 :func:`port_flows` (Eq. (21)), :func:`tip_flows` (Eq. (22) and sec. 3.2),
 :func:`line_flows` (sec. 3.3, 3.4 and the delivery restriction of sec. 4),
@@ -30,24 +30,26 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
-from ..geometry.tables import AD, AS, DV, KREL, V, VR
+from ..geometry.tables import AD, AS, DFX, DFY, DV, FX, FY, KREL, V, VR
 from ..hydraulics.gaps import tooth_tip_flow
 from ..hydraulics.orifice import port_orifice_flow
 from ..hydraulics.state_equation import exp_small, state_of
 from .contact import column, locate
 from .gear_coupling import GC_ON, gear_squeeze
 from .volumes import displace_chamber, volumes_moved
-from .params import (FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT, FL_RESTRICTION, FL_SUCTION,
-                     FL_SUCTION_DELIVERY, N_JAC_EXTRA)
+from .params import (CT_GEO_OK, CT_GEO_TABLE, CT_GEO_THETA, FL_DELIVERY, FL_DRAIN, FL_MASS_IN, FL_MASS_OUT,
+                     FL_RESTRICTION, FL_SUCTION, FL_SUCTION_DELIVERY, N_JAC_EXTRA)
 
-__all__ = ["rhs", "chamber_geometry", "volume_states", "transfer", "port_flows", "tip_flows", "line_flows", "assemble",
-           "area_derivative", "closing_ports", "closing_share", "time_to_close",
-           "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV",
+__all__ = ["rhs", "chamber_geometry", "table_geometry", "volume_states", "transfer", "port_flows", "tip_flows",
+           "line_flows", "assemble", "area_derivative", "closing_ports", "closing_share", "time_to_close",
+           "G_V", "G_DV", "G_AS", "G_AD", "G_KREL", "G_VR", "G_SV", "G_DAS", "G_DAD", "G_DDV", "G_V0", "G_DV0", "G_FX",
+           "G_FY", "G_DFX", "G_DFY",
            "J_FT", "J_CS", "J_TCS", "J_CD", "J_CDN", "J_TCD", "N_JAC_EXTRA"]
 
-#: columns of Workspace.geo: V, dV/dθ, A_s, A_d, κ_rel, v_r/ω, and the slopes of the interpolated V, A_s, A_d
-#: and dV/dθ in θ (first stage only: the time derivative of the right-hand side)
-G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV = range(10)   # Workspace.geo has 10 columns
+#: columns of Workspace.geo: V, dV/dθ, A_s, A_d, κ_rel, v_r/ω, the slopes of the interpolated V, A_s, A_d and
+#: dV/dθ in θ (the time derivative of the right-hand side), and the table values the displaced V and dV/dθ are
+#: made of: V and dV/dθ of the centred gear set, FX, FY and their θ-derivatives (:func:`chamber_geometry`)
+G_V, G_DV, G_AS, G_AD, G_KREL, G_VR, G_SV, G_DAS, G_DAD, G_DDV, G_V0, G_DV0, G_FX, G_FY, G_DFX, G_DFY = range(16)
 #: Columns of Workspace.jac after ∂f/∂y (N+1 columns), as offsets from N+1: ∂f/∂t without the closing ports,
 #: then per row j the closing ports' shares of it and the time until they close (:func:`closing_ports`,
 #: :func:`closing_share`): suction port → chamber row [1/s²], its time to close [s]; delivery port → chamber
@@ -56,30 +58,53 @@ J_FT, J_CS, J_TCS, J_CD, J_CDN, J_TCD = range(N_JAC_EXTRA)
 
 
 @njit(inline="always")
-def chamber_geometry(theta, tab, n, geo, disp, acc, slopes):
-    """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``.
-
-    V and dV/dθ are those of the outer gear displaced by ``disp`` (:mod:`.volumes`), whose
-    squeeze flow goes into ``acc`` (which must be initialised: :func:`volume_states`).
-    ``slopes``: also dV/dθ [m³/rad], dA_s/dθ, dA_d/dθ [m²/rad] and d²V/dθ² [m³/rad²] of the centred
-    gear set as the slopes of the table's linear interpolation (exact for the interpolated columns).
-    """
-    moved = volumes_moved(disp)
+def table_geometry(theta, tab, n, geo):
+    """The table values of every chamber at shaft angle θ [rad] into ``geo``: A_s, A_d, κ_rel, v_r/ω, the slopes,
+    and V, dV/dθ, FX, FY, dFX/dθ, dFY/dθ of the centred gear set (``G_V0`` …), from which
+    :func:`chamber_geometry` makes the displaced V and dV/dθ."""
     for j in range(n):
         i0, i1, f = locate(tab, theta + j * tab.shift)
-        geo[j, G_V] = column(tab, V, i0, i1, f)
-        geo[j, G_DV] = column(tab, DV, i0, i1, f)
+        geo[j, G_V0] = column(tab, V, i0, i1, f)
+        geo[j, G_DV0] = column(tab, DV, i0, i1, f)
         geo[j, G_AS] = column(tab, AS, i0, i1, f)
         geo[j, G_AD] = column(tab, AD, i0, i1, f)
         geo[j, G_KREL] = column(tab, KREL, i0, i1, f)
         geo[j, G_VR] = column(tab, VR, i0, i1, f)
-        if slopes:
-            geo[j, G_SV] = (tab.rows[i1, V] - tab.rows[i0, V]) * tab.scale
-            geo[j, G_DAS] = (tab.rows[i1, AS] - tab.rows[i0, AS]) * tab.scale
-            geo[j, G_DAD] = (tab.rows[i1, AD] - tab.rows[i0, AD]) * tab.scale
-            geo[j, G_DDV] = (tab.rows[i1, DV] - tab.rows[i0, DV]) * tab.scale
+        geo[j, G_SV] = (tab.rows[i1, V] - tab.rows[i0, V]) * tab.scale
+        geo[j, G_DAS] = (tab.rows[i1, AS] - tab.rows[i0, AS]) * tab.scale
+        geo[j, G_DAD] = (tab.rows[i1, AD] - tab.rows[i0, AD]) * tab.scale
+        geo[j, G_DDV] = (tab.rows[i1, DV] - tab.rows[i0, DV]) * tab.scale
+        if tab.volumes_follow_gear:
+            geo[j, G_FX] = column(tab, FX, i0, i1, f)
+            geo[j, G_FY] = column(tab, FY, i0, i1, f)
+            geo[j, G_DFX] = column(tab, DFX, i0, i1, f)
+            geo[j, G_DFY] = column(tab, DFY, i0, i1, f)
+
+
+@njit(inline="always")
+def chamber_geometry(theta, tab, n, geo, disp, acc, ctrl):
+    """V, dV/dθ, port areas, κ_rel and v_r/ω of every chamber at shaft angle θ [rad] into ``geo``, with the slopes
+    of the interpolated V, A_s, A_d [m³/rad, m²/rad] and dV/dθ [m³/rad²] in θ (exact for the interpolated columns).
+
+    V and dV/dθ are those of the outer gear displaced by ``disp`` (:mod:`.volumes`), whose
+    squeeze flow goes into ``acc`` (which must be initialised: :func:`volume_states`).  The table values
+    (:func:`table_geometry`) are read once per angle: a sub-step's second stage and the next sub-step's first stage
+    are at the same θ, so the first stage takes them from ``geo``; ``ctrl[CT_GEO_OK]``, ``ctrl[CT_GEO_THETA]`` and
+    ``ctrl[CT_GEO_TABLE]`` (the table's address: a workspace used with another model's tables reads those) say
+    which values ``geo`` holds.
+    """
+    table = float(tab.rows.ctypes.data)
+    if ctrl[CT_GEO_OK] == 0.0 or ctrl[CT_GEO_THETA] != theta or ctrl[CT_GEO_TABLE] != table:
+        table_geometry(theta, tab, n, geo)
+        ctrl[CT_GEO_THETA] = theta
+        ctrl[CT_GEO_TABLE] = table
+        ctrl[CT_GEO_OK] = 1.0
+    moved = volumes_moved(disp)
+    for j in range(n):
+        geo[j, G_V] = geo[j, G_V0]
+        geo[j, G_DV] = geo[j, G_DV0]
         if moved:                                   # micro_motion.chamber_volumes: displaced
-            displace_chamber(tab, i0, i1, f, j, disp, geo, acc, G_V, G_DV)
+            displace_chamber(geo[j, G_FX], geo[j, G_FY], geo[j, G_DFX], geo[j, G_DFY], j, disp, geo, acc, G_V, G_DV)
 
 
 @njit(inline="always")
@@ -368,7 +393,7 @@ def rhs(y, theta, gaps, km, op, ws, f, jac, want_jac):
     """
     n = km.pc.n
     volume_states(y, km, op, ws)
-    chamber_geometry(theta, km.tab, n, ws.geo, ws.disp, ws.acc, want_jac)
+    chamber_geometry(theta, km.tab, n, ws.geo, ws.disp, ws.acc, ws.ctrl)
     for i in range(ws.flows.shape[0]):
         ws.flows[i] = 0.0
     if want_jac:

@@ -66,7 +66,7 @@ from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
                             close_pending, gear_move, linearise, linearise_with, set_constraint)
 from .loads import outer_gear_load
-from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
+from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
 from .step_control import (GAMMA, defect_error, defect_threshold, embedded_error, error_norm, error_weights,
                            port_filtered, step_factor, update_range)
@@ -202,12 +202,14 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
 
 
 @njit(inline="always")
-def ros2_step(y, th, h, km, op, ws):
-    """One ROS2 sub-step of size h [s] from (y, θ): ``ws.ynew`` and the embedded error ``ws.err``.
+def ros2_step(y, th2, h, km, op, ws):
+    """One ROS2 sub-step of size h [s] from (y, θ) to θ₂ = ``th2`` = θ + ωh [rad]: ``ws.ynew`` and the embedded
+    error ``ws.err``.
 
     ``ws.f0``/``ws.jac`` must hold the RHS, ∂f/∂y and (from column N+1 on, :func:`.flows.closing_ports`)
     ∂f/∂t at (y, θ, ``ws.gaps0``) (:func:`pressure_step` evaluates the first stage before it sizes the
-    sub-step); the second stage is at θ + ωh with ``ws.gaps1``.
+    sub-step); the second stage is at θ₂ with ``ws.gaps1`` (θ₂ passed, not summed here: the next first stage is at
+    the same angle to the bit, and reads the tables' values there from ``ws.geo``, :func:`.flows.chamber_geometry`).
     """
     n1 = y.shape[0]
     for i in range(n1):
@@ -226,7 +228,7 @@ def ros2_step(y, th, h, km, op, ws):
     lu_solve(ws.lu, ws.piv, ws.k1, ws.k1)
     for i in range(n1):
         ws.y1[i] = y[i] + h * ws.k1[i]
-    rhs(ws.y1, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(False))
+    rhs(ws.y1, th2, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(False))
     for i in range(n1):
         ws.f1[i] -= 2.0 * ws.k1[i] + gh * ws.err[i]
     lu_solve(ws.lu, ws.piv, ws.f1, ws.k2)
@@ -237,11 +239,11 @@ def ros2_step(y, th, h, km, op, ws):
 
 
 @njit          # called, not inlined: it runs on the few checked sub-steps, and a fourth inlined copy of the
-def _defect_norm(th, h, km, op, ws):     # right-hand side in the stepper cost 1.5–3.5 s of the first compile
-    """Error norm of the sub-step of h [s] from (·, θ) that ended at ``ws.ynew`` by its defect there
+def _defect_norm(th2, h, km, op, ws):    # right-hand side in the stepper cost 1.5–3.5 s of the first compile
+    """Error norm of the sub-step of h [s] that ended at (``ws.ynew``, θ₂ = ``th2``) by its defect there
     (:func:`.step_control.defect_error`): the right-hand side and Jacobian at the new state into ``ws.f1`` and
     ``ws.jac``, so the first stage that follows is evaluated afresh (at the new state or, rejected, at the old)."""
-    rhs(ws.ynew, th + op.omega * h, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(True))
+    rhs(ws.ynew, th2, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(True))
     defect_error(h, ws.f1, ws.k1, ws.k2, ws.jac, ws.err)
     ws.ctrl[CT_FRESH] = 0.0
     return error_norm(ws.err, ws.wt)
@@ -273,20 +275,22 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     for k in range(pc.n):
         ws.gaps_start[k] = ws.gaps0[k]
     attempts = 0
+    th = theta                                      # the angle of the accepted state [rad]
     while done < big_h * (1.0 - 1e-12):
         attempts += 1
         if attempts > ws.ctrl[CT_BOUND]:
             return STEP_WORK_BOUND
         h = min(h, big_h - done)
-        th = theta + op.omega * done
         if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ)
             _first_stage(y, th, km, op, ws, integrals, big_h)
         h = min(max(h, h_min), big_h - done)
+        last = done + h >= big_h * (1.0 - 1e-12)
+        th2 = theta + op.omega * big_h if last else th + op.omega * h   # the step's end: integrate's angle
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
         check = port_filtered(ws, h)
-        en = ros2_step(y, th, h, km, op, ws)
+        en = ros2_step(y, th2, h, km, op, ws)
         if en <= 1.0 or h <= h_min:
             finite = True
             for i in range(n1):
@@ -295,7 +299,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             if not finite:
                 return STEP_NONFINITE
             if check and h > h_min:
-                en = _defect_norm(th, h, km, op, ws)   # the embedded estimate is blind there (step_control)
+                en = _defect_norm(th2, h, km, op, ws)  # the embedded estimate is blind there (step_control)
         if en <= 1.0 or h <= h_min:
             if en > 1.0:
                 counters[C_FAILED] += 1               # accepted at the smallest sub-step above the tolerance
@@ -307,6 +311,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
                 ws.gaps0[k] = ws.gaps1[k]
             ws.ctrl[CT_FRESH] = 0.0
             done += h
+            th = th2
             counters[C_SUBSTEPS] += 1
         else:
             counters[C_REJECTED] += 1      # stage 1 stays valid: same (y, θ); after a defect check it is recomputed
@@ -424,6 +429,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     coupled = move != MOVE_FIXED and gear_in_stages(km)
     ex, ey, gam, kc = contact(km.tab, pc.n, pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat, bool(False))
     ws.ctrl[CT_CMAT_END] = 0.0                     # ws.cmat holds θ's expansions
+    ws.ctrl[CT_GEO_OK] = 0.0                       # ws.geo: no table values yet (the tables may be new)
     move_volumes(km.tab, ws.disp, ex, ey, 0.0)
     if not coupled:
         ws.gear[GC_ON] = 0.0

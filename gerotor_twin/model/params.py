@@ -54,9 +54,12 @@ ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 #: pending sub-step [s]; how many ports close within the horizon; the chamber pressures' recent range [Pa]; why
 #: the last output step was abandoned; the sub-step attempts an output step may take; the sub-step [s] above which
 #: the defect check runs (``step_control.defect_threshold``); 1 if ``Workspace.cmat`` holds the gap expansions at
-#: the end of the next output step (``gear_coupling.set_constraint``) (see ``Workspace.ctrl``)
-CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H, CT_CMAT_END = range(9)
-N_CTRL = 9
+#: the end of the next output step (``gear_coupling.set_constraint``); 1 if ``Workspace.geo`` holds the table values
+#: at the angle [rad] and of the table (its rows' address) in the next two slots (``flows.chamber_geometry``) (see
+#: ``Workspace.ctrl``)
+CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H, CT_CMAT_END, \
+    CT_GEO_OK, CT_GEO_THETA, CT_GEO_TABLE = range(12)
+N_CTRL = 12
 
 
 #: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
@@ -283,7 +286,7 @@ def workspace(n: int) -> Workspace:
     def v(k=n1):
         return np.zeros(k)
 
-    return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 10)), f0=v(), f1=v(), k1=v(), k2=v(),
+    return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 16)), f0=v(), f1=v(), k1=v(), k2=v(),
                      y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(N_CTRL),

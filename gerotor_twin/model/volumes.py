@@ -25,8 +25,6 @@ References
 from __future__ import annotations
 
 from .._jit import njit
-from ..geometry.tables import DFX, DFY, FX, FY
-from .contact import column, locate
 
 __all__ = ["volumes_moved", "displace_chamber", "move_volumes", "PLACEMENT_TOLERANCE"]
 
@@ -43,17 +41,15 @@ def volumes_moved(disp):
 
 
 @njit(inline="always")
-def displace_chamber(tab, i0, i1, f, j, disp, geo, acc, c_v, c_dv):
+def displace_chamber(fx, fy, dfx, dfy, j, disp, geo, acc, c_v, c_dv):
     """Displacement terms of chamber j's V (column ``c_v`` of ``geo``), dV/dθ (``c_dv``) and squeeze flow (``acc``).
 
-    ``i0, i1, f``: the chamber's table rows and weight (:func:`~.contact.locate`, shared with the
-    nominal geometry); ``disp`` (4,): displacement (ex, ey) [m] and the velocity of its last move
+    ``fx, fy``: the chamber's FX, FY [m³/m] and ``dfx, dfy`` their θ-derivatives [m³/(m·rad)] at its angle (the
+    tables' values); ``disp`` (4,): displacement (ex, ey) [m] and the velocity of its last move
     (vx, vy) [m/s] (all zero with nominal volumes: see :func:`volumes_moved`).
     """
-    fx = column(tab, FX, i0, i1, f)
-    fy = column(tab, FY, i0, i1, f)
     geo[j, c_v] += fx * disp[0] + fy * disp[1]
-    geo[j, c_dv] += column(tab, DFX, i0, i1, f) * disp[0] + column(tab, DFY, i0, i1, f) * disp[1]
+    geo[j, c_dv] += dfx * disp[0] + dfy * disp[1]
     acc[j] -= fx * disp[2] + fy * disp[3]                 # squeeze by the gear's last move [m³/s]
 
 
