@@ -184,7 +184,9 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     z = np.concatenate([state.log_density, state.eccentricity]).astype(float)
     z[n] = 0.0
     theta0 = float(state.theta)
-    with np.errstate(over="ignore"):        # scipy's finite-difference Jacobian grows its increments past 1e308
+    # scipy's num_jac multiplies the increment of the delivered volume z[n], on which f does not depend, by 10 at
+    # every Jacobian without a bound: past ≈ 300 Jacobians it overflows to inf (the column stays zero: harmless)
+    with np.errstate(over="ignore"):
         for _ in range(revolutions - 1):
             f, atol = _system(model, op, theta0, tau)
             z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
