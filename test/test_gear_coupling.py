@@ -74,6 +74,28 @@ def test_external_path_with_the_mobility_kernel_is_the_compiled_path(cfg):
     assert np.abs(e["compiled"] - e["external"]).max() < 1e-12
 
 
+def test_compiled_method_1_is_its_python_loop_bit_for_bit(cfg):
+    """Behaviour: Method 1's output steps run in one compiled loop (``kernel.integrate_short``) with the calls of the
+    Python loop that FDM keeps (``kernel._integrate_external_in_stages``: the contact, the pressures, the
+    linearisation with the bearing's kernel, one compiled step) in the same order: the chamber pressures, peaks,
+    eccentricity, delivery flow and final state are the same bit for bit, with the tooth constraint and without."""
+    from types import SimpleNamespace
+    from gerotor_twin.model import kernel as K
+    inp = Inputs(1500 * math.pi / 30, P_ATM, P_ATM + 20e5)
+    for scheme in ("constrained", "stages"):
+        c = replace(cfg, numerics=replace(cfg.numerics, gear_coupling=scheme))
+        got = {}
+        for path in ("compiled", "python loop"):
+            m = PumpModel(c, "short")
+            if path == "python loop":      # the bearing under another name: the loop of the other kernels
+                m.bearing = SimpleNamespace(name=path, kernel=m.bearing.kernel, params=m.bearing.params)
+            st, out = m.advance(m.initial_state(inp), 0.01, inp)
+            got[path] = np.concatenate([out.chamber_pressures.ravel(), out.chamber_peak_pressures.ravel(),
+                                        out.eccentricity.ravel(), out.delivery_flow, st.log_density, st.eccentricity])
+        assert np.array_equal(got["compiled"], got["python loop"]), scheme
+        assert K.integrate_short.signatures, "the compiled loop did not run"
+
+
 def test_the_workspace_of_a_mobility_run_is_coupled(cfg, warm):
     """Behaviour: after an advance with the default numerics (``constrained``) the stages carry the gear (GC_ON)
     with the tooth constraint (GC_CON); the partitioned setting and the fixed centre leave it off."""

@@ -43,13 +43,14 @@ import math
 
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
+from ..bearing.short_bearing import short_kernel
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, gap_coefficients, locate
 from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
-           "linearise_with", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending", "gear_move"]
+           "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending", "gear_move"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -287,6 +288,20 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     d = load_step(fx, fy)
     set_velocity(gc, fx, fy, mobility_kernel(ex, ey, fx, fy, omega2, bp),
                  mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
+
+
+@njit
+def linearise_short(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, constrained):
+    """:func:`linearise_with` for Method 1 (:func:`~gerotor_twin.bearing.short_bearing.short_kernel`, ``params`` its
+    parameters) compiled: the same calls in the same order, from :func:`.kernel.integrate_short` without a return
+    to Python per output step; the tooth constraint set up where ``constrained``."""
+    fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
+    omega2 = omega * (km.pc.n - 1) / km.pc.n
+    d = load_step(fx, fy)
+    set_velocity(gc, fx, fy, short_kernel(ex, ey, fx, fy, omega2, params),
+                 short_kernel(ex, ey, fx + d, fy, omega2, params), short_kernel(ex, ey, fx, fy + d, omega2, params), d)
+    if constrained and h > 0.0:
+        set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):

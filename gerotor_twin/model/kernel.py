@@ -64,7 +64,7 @@ from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
-                            close_pending, gear_move, linearise, linearise_with, set_constraint)
+                            close_pending, gear_move, linearise, linearise_short, linearise_with, set_constraint)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
@@ -533,7 +533,11 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
 
 def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap,
                                   counters, integrals):
-    """:func:`integrate_external` with the gear in the stages: linearise with ``bearing``, then one step."""
+    """:func:`integrate_external` with the gear in the stages: linearise with ``bearing``, then one step (Method 1:
+    the same, compiled, :func:`integrate_short`)."""
+    if bearing.name == "short":
+        return integrate_short(bearing.params, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap,
+                               counters, integrals, MOVE_EXTERNAL, ws.gear if km.pc.gear_constrained else None)
     abandoned = counters[C_ABANDONED]
     for i in range(n_steps):
         ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat)
@@ -542,6 +546,32 @@ def _integrate_external_in_stages(bearing, y, e, theta, t, n_steps, h, km, op, w
         theta, t = integrate(y, e, theta, t, 1, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
                              rec_gap[i:i + 1], counters, integrals, MOVE_EXTERNAL,
                              ws.gear if km.pc.gear_constrained else None)
+        if counters[C_ABANDONED] != abandoned:
+            break
+    return theta, t
+
+
+@njit
+def integrate_short(params, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_gap, counters, integrals,
+                    move, constraint=None):
+    """:func:`_integrate_external_in_stages` with Method 1's kernel compiled in (``params``: its parameters,
+    :class:`~gerotor_twin.bearing.short_bearing.ShortBearing`): the same calls in the same order, so the same
+    results bit for bit, without the return to Python and the dispatch of :func:`integrate` at every output step
+    (docs/performance.md, "Cost of the four outer-gear models").  ``constraint`` as for :func:`integrate` (its type
+    selects the specialisation).  ``move``: ``MOVE_EXTERNAL``, and the one step per call ``min(1, n_steps)``,
+    reach :func:`integrate` as run-time integers: a constant written here would be typed as its literal value and
+    compile a specialisation of :func:`integrate` of its own (≈ 12 s).  The FDM bearing's kernel allocates its
+    fields and stays in the Python loop."""
+    abandoned = counters[C_ABANDONED]
+    one = min(1, n_steps)
+    for i in range(n_steps):
+        ex, ey, _gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, e[0], e[1], ws.gaps0, ws.cmat,
+                                   bool(False))
+        to_pressures(y, km, ws.pres)
+        linearise_short(params, ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows, ws.cmat,
+                        constraint is not None)
+        theta, t = integrate(y, e, theta, t, one, h, km, op, ws, rec[i:i + 1], rec_p[i:i + 1], rec_peak[i:i + 1],
+                             rec_gap[i:i + 1], counters, integrals, move, constraint)
         if counters[C_ABANDONED] != abandoned:
             break
     return theta, t
