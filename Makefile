@@ -3,7 +3,7 @@
 #   make test   same set-up, then the whole test suite on every core (pytest-xdist)
 # `make setup` also compiles the model's numba kernels once (python -m gerotor_twin.precompile: the
 # mobility and fixed-centre models, about 30 s on 2 cores, beside the install) into the on-disk cache, so no first
-# start of those models compiles (short, fdm and gear_coupling: constrained compile on first use, 3-11 s, with a line saying so);
+# start of those models compiles (short, fdm and gear_coupling: stages compile on first use, 5-12 s, with a line saying so);
 # the cache holds only the argument types, so it serves every pump, table size and fluid model.
 PYTHON ?= python3
 VENV   := .venv

@@ -560,7 +560,7 @@ def integrate_short(params, y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, 
     (docs/performance.md, "Cost of the four outer-gear models").  ``constraint`` as for :func:`integrate` (its type
     selects the specialisation).  ``move``: ``MOVE_EXTERNAL``, and the one step per call ``min(1, n_steps)``,
     reach :func:`integrate` as run-time integers: a constant written here would be typed as its literal value and
-    compile a specialisation of :func:`integrate` of its own (≈ 12 s).  The FDM bearing's kernel allocates its
+    compile a specialisation of :func:`integrate` of its own (≈ 5 s).  The FDM bearing's kernel allocates its
     fields and stays in the Python loop."""
     abandoned = counters[C_ABANDONED]
     one = min(1, n_steps)
