@@ -50,7 +50,8 @@ from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
-           "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending", "gear_move"]
+           "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
+           "gear_move"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
