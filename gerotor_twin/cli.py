@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from .bearing.registry import MODEL_NAMES
-from .errors import InputError, clip, one_line, one_line_warnings
+from .errors import InputError, one_line, one_line_warnings, path_error_line
 from .io.reader import McapReadError
 from .units import celsius_to_kelvin, kelvin_to_celsius, m3s_to_lpm, pa_abs_to_bar_gauge
 
@@ -511,8 +511,7 @@ def main(argv=None) -> int:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141                # 128 + SIGPIPE
     except OSError as exc:        # a path the user gave: directory, permission, missing (one line, exit 2)
-        name = f" {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"error:{clip(name)}: {clip(exc.strerror or str(exc))}", file=sys.stderr)
+        print(path_error_line(exc), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -14,7 +14,7 @@ import warnings
 from typing import Any, Iterator
 
 __all__ = ["InputError", "check_range", "check_ranges", "check_int", "check_finite", "short_repr", "clip", "one_line", "MAX_ERROR_CHARS",
-           "one_line_warnings"]
+           "one_line_warnings", "path_error_line"]
 
 #: Longest error line printed or put on /diagnostics [characters]; each part of an
 #: :class:`InputError` (field, value, allowed, reason) is clipped to a share of it.
@@ -48,6 +48,13 @@ def short_repr(value: Any, limit: int = _PART_CHARS) -> str:
 def one_line(exc: BaseException | str, limit: int = MAX_ERROR_CHARS) -> str:
     """The message of ``exc`` as one bounded line (for ``error: ...`` and /diagnostics)."""
     return clip(str(exc), limit)
+
+
+def path_error_line(exc: OSError) -> str:
+    """``error: PATH: reason`` for an OSError on a path the user gave (a directory that is a file, a permission, a
+    missing parent): one bounded line, as every command prints it (exit status 2)."""
+    name = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+    return f"error:{clip(name)}: {clip(exc.strerror or str(exc))}"
 
 
 def _own_category(category: type) -> bool:

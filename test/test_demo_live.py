@@ -103,3 +103,18 @@ def test_make_demo_end_to_end(tmp_path):
     assert fit["calibration"]["bags"] == ["bags/bench_map.mcap"]
     page = (tmp_path / "report.html").read_text()
     assert "id='tab-compare'" in page and "verdict calibrated from bench_map" in page
+
+
+def test_an_output_directory_under_a_file_is_one_line(tmp_path, capsys):
+    """Behaviour: ``make demo``'s ``--out`` below a regular file (``out`` a file in the checkout): one line naming
+    the path and why, exit status 2, before any domain is claimed or process started, as every command says it."""
+    from gerotor_twin.ros.demo_live import main
+    blocker = tmp_path / "out"
+    blocker.write_text("not a directory")
+    assert main(["--out", str(blocker / "demo")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err and str(blocker) in err and "Not a directory" in err, err
+    assert blocker.read_text() == "not a directory"
+    from gerotor_twin.cli import main as cli                 # the same line from a command of the CLI
+    assert cli(["batch", str(ROOT / "bags"), "-o", str(blocker / "fleet"), "--model", "fixed"]) == 2
+    assert capsys.readouterr().err.strip() == err.replace(str(blocker / "demo" / "log"), str(blocker / "fleet"))

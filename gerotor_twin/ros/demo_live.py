@@ -279,13 +279,18 @@ def _report(args, logs: list[Path], out: Path) -> dict | None:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    out = Path(args.out).resolve()
+    log_dir = out / "log"
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:                 # --out under a file, not writable: one line, as the CLI says it
+        from gerotor_twin.errors import path_error_line
+        print(path_error_line(exc), file=sys.stderr)
+        return 2
     if args.domain_id is None:
         from gerotor_twin.ros.domain import claim_domain
         env_id = os.environ.get("GEROTOR_TWIN_DEMO_DOMAIN")
         args.domain_id = int(env_id) if env_id else claim_domain()
-    out = Path(args.out).resolve()
-    log_dir = out / "log"
-    log_dir.mkdir(parents=True, exist_ok=True)
     print("demo: model kernels (compiled by make setup; on a cold cache once now, under a minute) ...", flush=True)
     print(f"demo: model kernels ready in {_compile_kernels(args.model):.1f} s", flush=True)
     t0 = time.monotonic()
