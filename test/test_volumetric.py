@@ -1,9 +1,10 @@
-"""The effective displacement k_D (``volumetric.displacement_factor``): where it acts, and that a fit recovers it.
+"""The edge losses (``volumetric``: effective displacement k_D, filling loss k_f, bypass): where they act, and
+that a fit recovers them.
 
-Tiers: closed form (the deficit (1 − k_D)·D·ω/2π in the steady state and the twin's revolution summary);
-bad input (the config's range); closed form on a synthetic truth (a map made by the twin at known clearances
-and a known displacement deficit is recovered within its 95 % interval, and the tip/lateral fit alone
-cannot represent it).
+Tiers: closed form (the deficit (1 − k_D)·D·ω/2π and the filling loss k_f (ω/ω₁)² (p_atm/p_s)·D·ω/2π in the
+steady state and the twin's revolution summary); bad input (the config's range); closed form on a synthetic
+truth (a map made by the twin at known clearances and a known displacement deficit or filling loss is recovered
+within its 95 % interval, and the tip/lateral fit alone cannot represent it).
 """
 import math
 from types import SimpleNamespace
@@ -13,7 +14,7 @@ import pytest
 
 from gerotor_twin.config import load_config, parse_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.model.volumetric import EdgeLosses, bypass_flow, displacement_deficit
+from gerotor_twin.model.volumetric import EdgeLosses, bypass_flow, displacement_deficit, filling_deficit
 from gerotor_twin.calibration.command import calibrate_records
 from gerotor_twin.calibration.map_synth import synthetic_map
 from gerotor_twin.twin.revolution import Revolution
@@ -23,11 +24,12 @@ CLEARANCE_FACTOR, K_D = 1.2, 0.95
 POINTS = [(rpm * math.pi / 30, 101325.0 + bar * 1e5, 45.0) for rpm in (1200, 2800) for bar in (4, 12, 20)]
 
 
-def _raw(clearance_factor=1.0, k_d=1.0):
+def _raw(clearance_factor=1.0, k_d=1.0, k_f=0.0):
     raw = load_config().to_dict()
     raw["clearances"]["tooth_tip_m"] *= clearance_factor
     raw["clearances"]["lateral_m"] *= clearance_factor
     raw["volumetric"]["displacement_factor"] = k_d
+    raw["volumetric"]["filling_loss_at_1000rpm"] = k_f
     return raw
 
 
@@ -42,6 +44,20 @@ def test_edge_losses_closed_form():
     assert edge.flow(100 * math.pi, 8.7e5 + 1e5, 1e5) == pytest.approx(4e-5 + 1e-6 * math.sqrt(2000.0))
 
 
+def test_filling_deficit():
+    """Closed form: k_f = 0.01 at 2000 rpm (ω/ω₁ = 2) and atmospheric suction leaves 4 % of the chambers
+    unfilled: 0.04 × 20 cm³ × 100/3 rev/s = 2.6667e-5 m³/s; at half the suction pressure twice that; clipped
+    at the whole displacement; none at k_f = 0; added to the other edge losses."""
+    w = 2000 * math.pi / 30
+    q = 20e-6 * w / (2 * math.pi)
+    assert filling_deficit(w, 101325.0, 20e-6, 0.01) == pytest.approx(0.04 * q)
+    assert filling_deficit(w, 101325.0 / 2, 20e-6, 0.01) == pytest.approx(0.08 * q)
+    assert filling_deficit(w, 101325.0, 20e-6, 0.5) == pytest.approx(q)
+    assert filling_deficit(w, 101325.0, 20e-6, 0.0) == 0.0
+    edge = EdgeLosses(20e-6, 0.96, 0.0, 870.0, 0.01)
+    assert edge.flow(w, 20e5, 101325.0) == pytest.approx(0.04 * q + 0.04 * q)
+
+
 def test_revolution_summary_closed_form():
     """Closed form: over one revolution of T = 0.04 s the model delivering 9e-6 m³ of a 10 cm³ pump, 1e-6 m³
     lost at the edge: mean 2e-4 m³/s, η_v 0.8, leakage 5e-5 m³/s."""
@@ -52,13 +68,19 @@ def test_revolution_summary_closed_form():
 
 
 def test_config_range():
-    """Bad input: a displacement factor outside [0.5, 1.1] is refused naming the field; absent means 1."""
+    """Bad input: a displacement factor outside [0.5, 1.1] or a negative filling loss is refused naming the field;
+    absent means 1 and 0."""
     raw = _raw()
     raw["volumetric"]["displacement_factor"] = 1.3
     with pytest.raises(InputError, match="volumetric.displacement_factor"):
         parse_config(raw)
+    raw["volumetric"]["displacement_factor"] = 1.0
+    raw["volumetric"]["filling_loss_at_1000rpm"] = -0.01
+    with pytest.raises(InputError, match="volumetric.filling_loss_at_1000rpm"):
+        parse_config(raw)
     del raw["volumetric"]
-    assert parse_config(raw).displacement_factor == 1.0
+    cfg = parse_config(raw)
+    assert cfg.displacement_factor == 1.0 and cfg.filling_loss_at_1000rpm == 0.0
 
 
 @pytest.fixture(scope="module")
@@ -87,6 +109,33 @@ def test_map_fit_recovers_deficit_and_clearances(truth_map):
     assert f["eta_error"]["max_abs"] < 1e-3
     alone = calibrate_records(truth_map, ["truth.csv"], params=("tip", "lateral"), holdout=0, jobs=1)["fit"]
     assert alone["eta_error"]["max_abs"] > 0.01
+
+
+#: a filling loss of 0.5 % at 1000 rpm (4.5 % at 3000 rpm) at clearances × 1.2, three speeds
+K_F = 0.005
+FILLING_POINTS = [(rpm * math.pi / 30, 101325.0 + bar * 1e5, 45.0) for rpm in (1000, 2000, 3000) for bar in (4, 20)]
+
+
+def test_map_fit_recovers_the_filling_loss():
+    """Closed form (synthetic truth, the twin's own model): the steady state at k_f delivers
+    k_f·(ω/ω₁)²·D·ω/2π less than at k_f = 0 (atmospheric suction); fitting tip, lateral, displacement and
+    filling to the map at three speeds holds k_f, k_D = 1 and the gaps' factor inside their 95 % intervals;
+    the gaps with the displacement alone cannot represent a loss growing as n³ (efficiency error > 0.3 pt)."""
+    truth = synthetic_map(_raw(CLEARANCE_FACTOR, 1.0, K_F), FILLING_POINTS, source="filling.csv")
+    full = synthetic_map(_raw(CLEARANCE_FACTOR, 1.0), FILLING_POINTS[-1:])
+    d = load_config().gears.displacement_closed_form()
+    w = full[0].omega
+    assert full[0].flow_m3s - truth[-1].flow_m3s == pytest.approx(K_F * 9 * d * w / (2 * math.pi), rel=1e-9)
+    res = calibrate_records(truth, ["filling.csv"], params=("tip", "lateral", "displacement", "filling"),
+                            holdout=0, jobs=1)
+    by = {p["name"]: p for p in res["fit"]["parameters"]}
+    assert by["filling"]["identifiable"] and by["filling"]["ci95"][0] <= K_F <= by["filling"]["ci95"][1]
+    assert by["displacement"]["ci95"][0] <= 1.0 <= by["displacement"]["ci95"][1]
+    gaps = next(c for c in res["fit"]["combinations"] if abs(c["coefficients"]["lateral"]) > 0)
+    assert gaps["factor_ci95"][0] <= CLEARANCE_FACTOR <= gaps["factor_ci95"][1]
+    without = calibrate_records(truth, ["filling.csv"], params=("tip", "lateral", "displacement"), holdout=0,
+                                jobs=1)["fit"]
+    assert without["eta_error"]["max_abs"] > 3e-3
 
 
 #: a bypass of 0.5 mm² and a 3 % displacement deficit at the nominal clearances, at two oil temperatures
@@ -122,13 +171,13 @@ def test_bypass_recovered_where_the_data_separate_it(bypass_map):
 
 def test_twin_flows_carry_the_edge_losses():
     """Behaviour: the twin core (node and run-bag) applies the same edge losses as the steady state the
-    calibration fits: at 2000 rpm / 20 bar with k_D = 0.95 and a 0.5 mm² bypass, its revolution-mean flow
-    matches ``run_steady`` of the same config (0.2 %, as the nominal twin's does), and its instantaneous
-    delivery flow is lower than the nominal pump's by the closed-form loss (up to the ripple's phase)."""
+    calibration fits: at 2000 rpm / 20 bar with k_D = 0.95, k_f = 0.002 (0.8 % unfilled at 2000 rpm) and a
+    0.5 mm² bypass, its revolution-mean flow matches ``run_steady`` of the same config (0.2 %, as the nominal
+    twin's does), and its instantaneous delivery flow is lower than the nominal pump's by the closed-form loss (up to the ripple's phase)."""
     from gerotor_twin.model.pump import PumpModel
     from gerotor_twin.model.steady import run_steady
     from gerotor_twin.twin import TwinCore, TwinSettings
-    raw = _raw(1.0, 0.95)
+    raw = _raw(1.0, 0.95, 0.002)
     raw["volumetric"]["bypass_area_m2"] = 0.5e-6
     w, pd = 2000 * math.pi / 30, 101325.0 + 20e5
 
@@ -149,6 +198,6 @@ def test_twin_flows_carry_the_edge_losses():
     ref = run_steady(model, 2000, 20)
     assert summary[0] == pytest.approx(ref.mean_delivery_flow_m3s, rel=2e-3)
     _, _, nominal = run(parse_config(_raw()))
-    loss = (0.05 * model.displacement * w / (2 * math.pi)
+    loss = ((0.05 + 0.002 * 4) * model.displacement * w / (2 * math.pi)
             + 0.5e-6 * math.sqrt(2 * (pd - 101325.0) / model.config.fluid.density_kg_m3))
     assert np.mean(nominal - flows) == pytest.approx(loss, rel=0.02)

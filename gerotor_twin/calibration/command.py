@@ -23,21 +23,23 @@ from ..config import load_config, parse_config
 from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
-from .fit_model import DISPLAY_UNITS, apply, parse_params
+from .fit_model import DISPLAY_UNITS, PARAMETERS, apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
 from .pump_map import MapLimits, PumpMapError, read_map
 
-#: what ``--map`` may fit by default: the gaps, their opening with pressure, the effective displacement and the
-#: bypass path
-MAP_PARAMS = ("tip", "lateral", "lateral_opening", "displacement", "bypass")
+#: what ``--map`` may fit by default: the gaps, their opening with pressure, the effective displacement, the
+#: bypass path and the filling loss growing with speed
+MAP_PARAMS = ("tip", "lateral", "lateral_opening", "displacement", "bypass", "filling")
 #: the candidate sets ``--map`` compares by default (the prior besides): each loss alone and with the gaps (the
 #: lateral gap's opening with pressure alone as well: over a narrow pressure range its Δp² is confused with the
-#: gaps' Δp, and the identifiability analysis would keep it at its prior beside them)
+#: gaps' Δp, and the identifiability analysis would keep it at its prior beside them); the filling loss with the
+#: gaps, and with the gaps and the displacement (at two speeds or more its n³ and the displacement's n differ)
 MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"),
                   ("tip", "lateral", "bypass"), ("tip", "lateral", "displacement", "bypass"),
-                  ("lateral_opening",), ("lateral_opening", "displacement"), ("tip", "lateral", "lateral_opening"))
+                  ("lateral_opening",), ("lateral_opening", "displacement"), ("tip", "lateral", "lateral_opening"),
+                  ("tip", "lateral", "filling"), ("tip", "lateral", "displacement", "filling"))
 
 #: the candidate sets ``--bench`` compares by default (the prior besides): the gaps, the effective displacement
 #: alone and with the gaps (a pump that differs from the twin in form: free air, another port law, tolerances of
@@ -489,9 +491,9 @@ def add_parser(sub) -> None:
                           "the header (example: config/maps/example_map.csv)")
     p.add_argument("-o", "--output", required=True, help="pump YAML to write (usable with --config, pump_config)")
     p.add_argument("--params", default=None,
-                   help="comma list of tip, lateral, cd, tip_dh, air, displacement, bypass: fitted (--cv none) or the largest "
+                   help="comma list of " + ", ".join(PARAMETERS) + ": fitted (--cv none) or the largest "
                         "candidate set (default with --bench: tip,lateral fitted with --cv none, else the default candidates of "
-                        "--candidates; with --map tip,lateral,displacement,bypass)")
+                        "--candidates; with --map " + ",".join(MAP_PARAMS) + ")")
     p.add_argument("--cv", choices=("auto", "speed", "point", "none"), default=None,
                    help="choose the parameter set by cross-validation: leave one speed (or point) out; auto: speed "
                         "when there are two speeds or more (default auto); none: fit --params, hold out every "
@@ -499,12 +501,10 @@ def add_parser(sub) -> None:
                         "held-out plateaus no better")
     p.add_argument("--candidates", default=None, metavar="SETS",
                    help="candidate sets for --cv, ';'-separated (e.g. 'displacement;tip,lateral,displacement'); "
-                        "the prior is always one (default with --map and no --params: the gaps, the displacement, "
-                        "the gaps with each of displacement and bypass, all four, the gaps' opening under pressure "
-                        "alone, with the displacement and with the gaps; with --map and --params every "
+                        "the prior is always one (default with --map and no --params: "
+                        + "; ".join(",".join(c) for c in MAP_CANDIDATES) + "; with --map and --params every "
                         "subset of --params up to 3 parameters, their prefixes beyond; with --bench and no --params: "
-                        "tip,lateral;displacement;tip,lateral,displacement;tip,lateral,lateral_opening; with --bench "
-                        "--params as one set)")
+                        + "; ".join(",".join(c) for c in BENCH_CANDIDATES) + "; with --bench --params as one set)")
     p.add_argument("--config", help="prior pump YAML (default config/pump.yaml)")
     p.add_argument("--model", default="mobility", help="outer-gear model of the twin (default mobility)")
     p.add_argument("--holdout", type=int, default=4,

@@ -23,10 +23,13 @@ displace-  volumetric.displacement_      effective displacement k_D: a flow defi
 ment       factor                        (1 − k_D)·D·n at every pressure and speed
 bypass     volumetric.bypass_area_m2     a turbulent delivery → suction path, ∝ √Δp
                                          (fitted linearly, step 1 mm²)
+filling    volumetric.filling_loss_      chambers filling short at speed: a deficit
+           at_1000rpm                    k_f·(n/1000 rpm)²·(p_atm/p_s)·D·n (fitted
+                                         linearly, step 0.001)
 =========  ============================  ===========================================
 
 Each starts at its prior, the value of the pump config given (``displacement``: 1, the ideal
-profiles, ``lateral_opening``: 0, rigid plates, unless the config says otherwise), and is fitted only when the identifiability
+profiles, ``lateral_opening`` and ``filling``: 0, rigid plates and full chambers, unless the config says otherwise), and is fitted only when the identifiability
 analysis finds the data determine it (:mod:`.identifiability`); otherwise it stays there.
 """
 from __future__ import annotations
@@ -82,6 +85,8 @@ PARAMETERS = {p.name: p for p in (
                  "effective displacement / ideal profiles' (filling, tolerances)"),
     FitParameter("bypass", "volumetric", "bypass_area_m2", 0.0, 1e-4, "m²",
                  "effective area of a turbulent delivery → suction path", step=1e-6),
+    FitParameter("filling", "volumetric", "filling_loss_at_1000rpm", 0.0, 0.2, "-",
+                 "chambers' unfilled fraction at 1000 rpm and atmospheric suction (grows as speed²)", step=1e-3),
 )}
 
 
@@ -191,11 +196,11 @@ def plateau_flow(task: PlateauTask) -> dict:
 
 
 def without_edge_losses(raw: dict) -> dict:
-    """The raw config mapping with its ``volumetric`` section at the ideal pump (k_D = 1, no bypass): the edge
+    """The raw config mapping with its ``volumetric`` section at the ideal pump (k_D = 1, no bypass, full chambers): the edge
     losses are applied after the chamber model (:mod:`gerotor_twin.model.volumetric`), so every ``volumetric``
     section shares one run of it (:func:`with_edge_losses`)."""
     out = dict(raw)
-    out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0}
+    out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0, "filling_loss_at_1000rpm": 0.0}
     return out
 
 
@@ -207,5 +212,6 @@ def with_edge_losses(run: dict, raw: dict, omega: float) -> float:
     from ..model.volumetric import EdgeLosses
     vs = raw.get("volumetric", {})
     edge = EdgeLosses(run["displacement_m3"], float(vs.get("displacement_factor", 1.0)),
-                      float(vs.get("bypass_area_m2", 0.0)), run["density_kg_m3"])
+                      float(vs.get("bypass_area_m2", 0.0)), run["density_kg_m3"],
+                      float(vs.get("filling_loss_at_1000rpm", 0.0)))
     return run["edge_free_m3s"] - edge.flow(omega, run["p_delivery_pa"], run["p_suction_pa"])
