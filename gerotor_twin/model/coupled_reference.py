@@ -8,12 +8,13 @@ Runge–Kutta method of order 5 (Radau IIA, scipy's ``Radau`` [2]) at tight tole
 
 .. math::
     \dot y = f(y, \theta, \mathbf e, \dot{\mathbf e}),\qquad
-    \dot{\mathbf e} = \mathbf M(\mathbf e, \mathbf F(y, \theta, \mathbf e))
-        + \sum_{k=1,2} \lambda_k\, G\,\mathbf n_k
+    \dot{\mathbf e} = \mathbf M\Big(\mathbf e,\ \mathbf F(y, \theta, \mathbf e) + \sum_{k=1,2} \lambda_k\,\mathbf n_k\Big)
 
 with the gaps and displaced volumes at the current e (no freezing), the full nonlinear mobility M of sec. 2.2
-of [1] (not linearised), and the contact of the two lobes with the smallest gaps as the complementarity problem
-of :func:`.tooth_constraint.reactions`, with the rate of each gap taken as
+of [1] (not linearised: the film carries the load and the teeth's reactions together), and the contact of the
+two lobes with the smallest gaps as a complementarity problem in the reactions λ_k ≥ 0 along the gaps' normals
+n_k (Josephy–Newton, :func:`.gear_coupling.linearise_in_contact` at every right-hand side; ``full=False``: the reactions through the mobility linearised at the
+free load, ė = M(e, F) + Σ λ_k G n_k, for comparison), with the rate of each gap taken as
 
 .. math::
     r_k = \frac{\partial g_k}{\partial\theta}\,\omega + \frac{g_k}{\tau}
@@ -41,7 +42,7 @@ from ..bearing.mobility import mobility_kernel
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 from .contact import contact, gap_coefficients, gap_value
 from .flows import rhs
-from .gear_coupling import GC_ON, load_step
+from .gear_coupling import GC_CON, GC_ON, GC_PAIR, N_GEAR, gear_velocity, linearise_in_contact, load_step, set_velocity
 from .kernel import to_pressures
 from .loads import outer_gear_load
 from .params import FL_DELIVERY, operating
@@ -90,7 +91,7 @@ def _handover_load(pres, theta, omega, ex, ey, kc, k1, k2, g1, g2, km):
 
 
 @njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
-def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
+def coupled_rhs(t, z, theta0, tau, km, op, ws, out, full=True):
     """d/dt of z = (y [-], e [m]) [1/s, m/s] into ``out`` at t [s] (θ = θ₀ + ωt [rad]); τ: the relaxation [s].
 
     ``z``: the N+1 log-densities (the last: ∫ delivered flow dt [m³] in imposed-pressure mode, as the
@@ -119,7 +120,15 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     n2x, n2y = gap_normal(ws.cmat[k2], ex, ey)
     contact_pair((v1x - vx) / d, (v2x - vx) / d, (v1y - vy) / d, (v2y - vy) / d, n1x, n1y, n2x, n2y,
                  r1 + g1 / tau, r2 + g2 / tau, c)
-    vx, vy, _l1, _l2 = constrained_velocity(vx, vy, c)
+    if full:                                          # the reactions through the full mobility, as the twin's
+        gc = np.zeros(N_GEAR)
+        set_velocity(gc, fx, fy, (vx, vy), (v1x, v1y), (v2x, v2y), d)
+        gc[GC_PAIR:GC_PAIR + 10] = c
+        gc[GC_CON] = 1.0
+        linearise_in_contact(ex, ey, op.omega, km, gc)
+        vx, vy = gear_velocity(fx, fy, gc)
+    else:
+        vx, vy, _l1, _l2 = constrained_velocity(vx, vy, c)
     ws.disp[0], ws.disp[1], ws.disp[2], ws.disp[3] = ex, ey, vx, vy      # volumes at e, squeezed by ė (volumes.py)
     ws.gear[GC_ON] = 0.0
     rhs(y, theta, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(False))
@@ -129,12 +138,12 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out):
     out[n1 + 1] = vy
 
 
-def _system(model, op, theta0: float, tau: float):
+def _system(model, op, theta0: float, tau: float, full: bool = True):
     """The coupled system's right-hand side f(t, z) with θ = θ₀ + ωt [rad], and Radau's absolute tolerances."""
     n, out = model.N, np.empty(model.N + 3)
 
     def f(t, zz):
-        coupled_rhs(t, zz, theta0, tau, model.kernel, op, model._ws, out)
+        coupled_rhs(t, zz, theta0, tau, model.kernel, op, model._ws, out, full)
         return out.copy()
     atol = np.full(n + 3, 1e-9)
     atol[n] = 1e-12
@@ -143,7 +152,7 @@ def _system(model, op, theta0: float, tau: float):
 
 
 def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 2, rtol: float = 1e-7,
-                       samples_per_step: int = 8):
+                       samples_per_step: int = 8, full: bool = True):
     """One revolution of the coupled reference at (rpm, bar gauge), after ``revolutions − 1`` settling ones.
 
     Parameters
@@ -188,13 +197,13 @@ def coupled_revolution(model, rpm: float, bar: float, state, revolutions: int = 
     # every Jacobian without a bound: past ≈ 300 Jacobians it overflows to inf (the column stays zero: harmless)
     with np.errstate(over="ignore"):
         for _ in range(revolutions - 1):
-            f, atol = _system(model, op, theta0, tau)
+            f, atol = _system(model, op, theta0, tau, full)
             z = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol).y[:, -1]
             z[n] = 0.0
             theta0 += 2.0 * math.pi                                    # the next revolution starts here
     m = max(1, int(math.ceil(period / model.step_size(omega) - 1e-9)))     # the twin's output steps (advance)
     t_fine = np.linspace(0.0, period, m * samples_per_step + 1)
-    f, atol = _system(model, op, theta0, tau)
+    f, atol = _system(model, op, theta0, tau, full)
     with np.errstate(over="ignore"):
         sol = solve_ivp(f, (0.0, period), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
     fine = sol.sol(t_fine)

@@ -29,13 +29,18 @@ spread over the next step) answers one output step late.  The trapezoid of
 :math:`\dot{\mathbf e}` over the accepted sub-steps is the gear's move (so the volumes the stages
 squeezed are where the gear is); the housing cap and the overlap check's pull-back change it a
 little, and that remainder is squeezed over the next step as before (:func:`.volumes.move_volumes`).
-Method 1 and the FDM bearing are linearised the same way with their own velocity kernels
-(:func:`linearise_with`); numerics config ``gear_coupling: partitioned`` keeps the former scheme for
+Where the step starts with the gear on the teeth, ė₀ and G are taken at the load the film carries there, the
+free load plus the teeth's reactions solved through the full film law (:func:`linearise_in_contact`, Josephy–Newton
+[2]).  Method 1 and the FDM bearing are linearised the same way with their own velocity kernels
+(:func:`linearise_with`, :func:`linearise_short`); numerics config ``gear_coupling: partitioned`` keeps the former scheme for
 every bearing model (docs/numerics.md, "The gear in the stages").
 
 References
 ----------
 .. [1] The paper, sec. 2.2 (mobility method) and 3.6 (``../shared/paper``).
+.. [2] N.H. Josephy, "Newton's method for generalized equations", Technical Summary Report 1965, Mathematics
+   Research Center, University of Wisconsin, 1979; F. Facchinei, J.-S. Pang, *Finite-Dimensional Variational
+   Inequalities and Complementarity Problems*, Springer 2003, sec. 7.3.
 """
 from __future__ import annotations
 
@@ -47,11 +52,12 @@ from ..bearing.short_bearing import short_kernel
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, gap_coefficients, locate
 from .loads import journal_torque
-from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility
+from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility, reactions
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
-           "gear_move"]
+           "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact",
+           "FULL_ITERATIONS", "FULL_RTOL"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -278,6 +284,79 @@ def set_constraint(ex, ey, theta, h, km, gc, cmat):
     gc[GC_CON] = 1.0
 
 
+#: Josephy–Newton iterations at most of the reactions through the full film law (:func:`contact_newton_step`)
+FULL_ITERATIONS = 60
+#: their convergence: the reactions' change below this fraction of |F₀| + |λ| [-]
+FULL_RTOL = 1e-10
+
+
+@njit(inline="always")
+def held_reactions(gc):
+    """The reactions (λ₁, λ₂) [N] at the step's start load F₀ of the contacts set by :func:`set_constraint`, with
+    the linearisation of :func:`set_velocity` (0, 0: the free motion opens both gaps)."""
+    _vx, _vy, l1, l2 = constrained_velocity(gc[GC_V0X], gc[GC_V0Y], gc[GC_PAIR:GC_PAIR + 10])
+    return l1, l2
+
+
+@njit(inline="always")
+def contact_load(fx, fy, l1, l2, gc):
+    """The load [N] the film carries: F₀ = (fx, fy) plus the reactions λ₁, λ₂ along the contacts' normals."""
+    c = GC_PAIR
+    return fx + l1 * gc[c] + l2 * gc[c + 2], fy + l1 * gc[c + 1] + l2 * gc[c + 3]
+
+
+@njit(inline="always")
+def contact_newton_step(gc, fx, fy, l1, l2):
+    r"""One Josephy–Newton step [2] of the reactions through the full film law; returns (λ₁, λ₂, converged).
+
+    The film carries the load and the reactions together, ė = M(e, F₀ + λ₁n₁ + λ₂n₂), with each gap's rate
+    w_k = n_k·ė + r_k ≥ 0, λ_k ≥ 0, w_k λ_k = 0: a nonlinear complementarity problem.  ``gc`` holds ė and G at
+    the iterate's load :func:`contact_load` (``fx, fy``, ``l1, l2``; :func:`set_velocity` there) and the contacts of
+    :func:`set_constraint`; the step solves the linear complementarity problem of
+    :func:`.tooth_constraint.reactions` with A = NᵀG N and s = w(λ) − Aλ, and leaves the constraint on with G n at
+    this iterate.  Converged when λ moves by less than :data:`FULL_RTOL` of |F₀| + |λ|.
+    """
+    c = gc[GC_PAIR:GC_PAIR + 10]
+    contact_pair(gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY], c[0], c[1], c[2], c[3], c[8], c[9], c)
+    gc[GC_CON] = 1.0
+    a11, a12 = c[0] * c[4] + c[1] * c[5], c[0] * c[6] + c[1] * c[7]
+    a21, a22 = c[2] * c[4] + c[3] * c[5], c[2] * c[6] + c[3] * c[7]
+    s1 = c[0] * gc[GC_V0X] + c[1] * gc[GC_V0Y] + c[8] - (a11 * l1 + a12 * l2)
+    s2 = c[2] * gc[GC_V0X] + c[3] * gc[GC_V0Y] + c[9] - (a21 * l1 + a22 * l2)
+    m1, m2 = reactions(s1, s2, a11, a12, a21, a22)
+    return m1, m2, abs(m1 - l1) + abs(m2 - l2) <= FULL_RTOL * (math.hypot(fx, fy) + m1 + m2)
+
+
+@njit(inline="always")
+def linearise_in_contact(ex, ey, omega, km, gc):
+    r"""Move the step's linearisation of the mobility to the load the film carries on the teeth.
+
+    :func:`linearise` takes ė₀ and G at the free load F₀; where the step starts on the teeth the film carries
+    F₀ + λ₁n₁ + λ₂n₂, and a reaction comparable with F₀ turns the load, where the mobility is far from linear.
+    The reactions at the step's start are solved through the full mobility (:func:`contact_newton_step` from the
+    linearised ones, ė₀ and G taken afresh at each iterate's load) and the linearisation is left at the last:
+    the constrained velocity at F₀ is then M(e, F₀ + Nλ) itself, the reactions within the step are linear
+    about it.  Off the teeth (λ = 0 at F₀) nothing changes.  Call after :func:`set_constraint`.  Returns the
+    Josephy–Newton iterations (:data:`FULL_ITERATIONS` + 1: not converged; 0: off the teeth).
+    """
+    l1, l2 = held_reactions(gc)
+    if l1 == 0.0 and l2 == 0.0:
+        return 0
+    pc = km.pc
+    bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
+    omega2 = omega * (pc.n - 1) / pc.n
+    fx, fy = gc[GC_F0X], gc[GC_F0Y]
+    for it in range(FULL_ITERATIONS):
+        gx, gy = contact_load(fx, fy, l1, l2, gc)
+        d = load_step(gx, gy)
+        set_velocity(gc, gx, gy, mobility_kernel(ex, ey, gx, gy, omega2, bp),
+                     mobility_kernel(ex, ey, gx + d, gy, omega2, bp), mobility_kernel(ex, ey, gx, gy + d, omega2, bp), d)
+        l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
+        if done:
+            return it + 1
+    return FULL_ITERATIONS + 1
+
+
 @njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
 def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
@@ -303,6 +382,17 @@ def linearise_short(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
                  short_kernel(ex, ey, fx + d, fy, omega2, params), short_kernel(ex, ey, fx, fy + d, omega2, params), d)
     if constrained and h > 0.0:
         set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
+        l1, l2 = held_reactions(gc)            # on the teeth: :func:`linearise_in_contact` with Method 1's film
+        if l1 != 0.0 or l2 != 0.0:
+            for _ in range(FULL_ITERATIONS):
+                gx, gy = contact_load(fx, fy, l1, l2, gc)
+                d = load_step(gx, gy)
+                set_velocity(gc, gx, gy, short_kernel(ex, ey, gx, gy, omega2, params),
+                             short_kernel(ex, ey, gx + d, gy, omega2, params),
+                             short_kernel(ex, ey, gx, gy + d, omega2, params), d)
+                l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
+                if done:
+                    break
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):
@@ -316,6 +406,15 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
                  k(ex, ey, fx, fy + d, omega2, bp), d)
     if km.pc.gear_constrained and h > 0.0:
         set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
+        l1, l2 = held_reactions(gc)            # on the teeth: :func:`linearise_in_contact` with this film's law
+        for _ in range(FULL_ITERATIONS if l1 != 0.0 or l2 != 0.0 else 0):
+            gx, gy = contact_load(fx, fy, l1, l2, gc)
+            d = load_step(gx, gy)
+            set_velocity(gc, gx, gy, k(ex, ey, gx, gy, omega2, bp), k(ex, ey, gx + d, gy, omega2, bp),
+                         k(ex, ey, gx, gy + d, omega2, bp), d)
+            l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
+            if done:
+                break
 
 
 @njit(inline="always")

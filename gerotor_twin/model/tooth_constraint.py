@@ -13,7 +13,12 @@ mobility's velocity per force at that state (:mod:`.gear_coupling`).  With the g
     \lambda = \max\!\Big(0,\; -\frac{\mathbf n\cdot\dot{\mathbf e}_{free} + r}{\mathbf n^{T} G\,\mathbf n}\Big)
 
 so in contact :math:`\dot g = \mathbf n\cdot\dot{\mathbf e} + r = 0`, and a load that turns away
-(:math:`\mathbf n\cdot\dot{\mathbf e}_{free} + r > 0`) gives :math:`\lambda = 0`: the gear leaves.  The symmetric
+(:math:`\mathbf n\cdot\dot{\mathbf e}_{free} + r > 0`) gives :math:`\lambda = 0`: the gear leaves.  The film
+carries the load and the reactions together, ė = M(e, F + λn): the form above is its first order about the
+load G is taken at.  A reaction comparable with the load turns it, where the mobility is far from linear (13 at
+1000 rpm / 2 bar: the peak 8.7 % apart, docs/numerics.md), so where a step starts on the teeth the twin takes ė₀
+and G at the load the film carries there, the reactions solved through the full mobility
+(:func:`.gear_coupling.linearise_in_contact`), and the form above is exact at the step's start.  The symmetric
 part of G is positive definite for a dissipative film, so :math:`\mathbf n^T G \mathbf n > 0` and nothing is
 singular.  Over a step of h the time-stepping form of [2] (sec. 3) takes :math:`r = g_k(\mathbf e_0,
 \theta_0 + \omega h)/h`: the gap at the step's end, linearised in the move, is held at zero; a gap the free
