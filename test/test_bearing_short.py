@@ -78,6 +78,22 @@ def test_method1_velocity_balances_load():
         np.testing.assert_allclose(f, -load, atol=1e-9 * np.linalg.norm(load))
 
 
+def test_short_load():
+    """Closed form: ``short_load`` is Method 1 read the other way, the load under which the journal moves at ė is
+    minus the analytic pi-film force at ė (1e-9), and its ∂ė/∂F is the central difference of Method 1's velocity
+    (its Newton solve) in the load (1e-5 of |G|)."""
+    from gerotor_twin.bearing.short_bearing import short_load
+    model = make_bearing("short", TABLE1)
+    for e, e_dot, omega in _random_states(200, 5, eps_max=0.95):
+        got = np.array(short_load(e[0], e[1], e_dot[0], e_dot[1], omega, model.params))
+        load = -short_bearing_force(e, e_dot, omega, TABLE1)
+        np.testing.assert_allclose(got[:2], load, rtol=0.0, atol=1e-9 * np.linalg.norm(load))
+        d = 1e-5 * np.linalg.norm(load)
+        fd = np.column_stack([(model.velocity(e, load + d * u, omega) - model.velocity(e, load - d * u, omega)) / (2 * d)
+                              for u in np.eye(2)])
+        np.testing.assert_allclose(got[2:].reshape(2, 2), fd, rtol=0.0, atol=1e-5 * np.abs(fd).max())
+
+
 def test_zero_load_gives_half_speed_whirl():
     """No load, no film force: the centre turns at omega/2 (v = 0)."""
     e = np.array([0.3 * C, -0.2 * C])

@@ -146,21 +146,33 @@ def test_linearised_velocity_is_the_mobility_and_its_load_derivative(warm):
     assert np.abs(ours - g).max() <= 1e-5 * np.abs(g).max(), (ours, g)
 
 
-def test_a_step_on_the_teeth_starts_with_the_full_mobility(warm):
+@pytest.mark.parametrize("film", ["mobility", "short"])
+def test_a_step_on_the_teeth_starts_with_the_full_mobility(warm, film):
     """Closed form: where the step starts with a lobe holding the gear (its gap's rate under the free motion < 0),
-    ``linearise_in_contact`` moves ė₀ and G to the load the film carries, so the step's constrained velocity at
-    its start load F₀ is the mobility at F₀ + λn itself (1e-9) and holds the gap (n·ė + r = 0); the reaction
+    ``linearise_in_contact`` (the mobility method; Method 1: ``short_in_contact``, the iteration in the film's own
+    form) moves ė₀ and G to the load the film carries, so the step's constrained velocity at
+    its start load F₀ is the film's velocity at F₀ + λn itself (1e-9) and holds the gap (n·ė + r = 0); the reaction
     through G at the free load alone leaves the gap closing at more than 1 % of the free speed when the film is
     asked for its own velocity.  A step whose gaps the free motion opens keeps the linearisation at F₀ bit for bit;
     a gear wedged between two lobes at zero rates stands still under reactions the film itself answers with ė = 0."""
+    from gerotor_twin.bearing import make_bearing
+    from gerotor_twin.bearing.short_bearing import short_kernel
     m, inp, s = warm
     pc = m.kernel.pc
     ex, ey = s.eccentricity
     w2 = inp.omega * (m.N - 1) / m.N
+    params = make_bearing("short", m.bearing_geometry).params
 
     def v(a, b):
+        if film == "short":
+            return np.array(short_kernel(ex, ey, a, b, w2, params))
         return np.array(mobility_velocity(ex, ey, a, b, w2, pc.housing_clearance, pc.width, 2 * pc.journal_radius,
                                           pc.viscosity))
+
+    def solve(gc):
+        if film == "short":
+            return GC.short_in_contact(params, ex, ey, w2, gc)
+        return GC.linearise_in_contact(ex, ey, inp.omega, m.kernel, gc)
 
     def coupling(f, rates, n1=(0.8, 0.6), n2=(-1.0, 0.0)):
         gc = np.zeros(GC.N_GEAR)
@@ -180,7 +192,7 @@ def test_a_step_on_the_teeth_starts_with_the_full_mobility(warm):
     assert lin[GC.GC_LAM1] > 0.0 and abs(n1 @ v_lin) < 1e-12 * speed  # held at first order...
     assert abs(n1 @ v(*(f + lin[GC.GC_LAM1] * n1))) > 0.01 * speed    # ...not by the film's own law
     gc = coupling(f, (0.0, 3 * speed))
-    assert 0 < GC.linearise_in_contact(ex, ey, inp.omega, m.kernel, gc) <= GC.FULL_ITERATIONS
+    assert 0 < solve(gc) <= GC.FULL_ITERATIONS
     ve = np.array(GC.gear_velocity(f[0], f[1], gc))
     lam = gc[GC.GC_LAM1]
     assert lam > 0.0 and gc[GC.GC_LAM2] == 0.0 and gc[GC.GC_CON] == 1.0
@@ -188,11 +200,11 @@ def test_a_step_on_the_teeth_starts_with_the_full_mobility(warm):
     assert abs(n1 @ ve) < 1e-9 * speed
     free = coupling(f, (3 * speed, 3 * speed))
     before = free.copy()
-    assert GC.linearise_in_contact(ex, ey, inp.omega, m.kernel, free) == 0
+    assert solve(free) == 0
     assert np.array_equal(free, before)
     n1, n2 = np.array([0.6, 0.8]), np.array([-0.6, 0.8])              # wedged: both lobes hold it still
     gc = coupling(f, (0.0, 0.0), n1, n2)
-    assert 0 < GC.linearise_in_contact(ex, ey, inp.omega, m.kernel, gc) <= GC.FULL_ITERATIONS
+    assert 0 < solve(gc) <= GC.FULL_ITERATIONS
     ve = np.array(GC.gear_velocity(f[0], f[1], gc))
     lam = np.array([gc[GC.GC_LAM1], gc[GC.GC_LAM2]])
     assert np.all(lam > 0.0) and np.all(np.abs(ve) < 1e-9 * speed)

@@ -47,7 +47,7 @@ from gerotor_twin.bearing.geometry import BearingGeometry
 from gerotor_twin.bearing.mobility import mobility_velocity
 from gerotor_twin.errors import InputError
 
-__all__ = ["ShortBearing", "pressure", "short_film_force", "short_velocity", "short_kernel"]
+__all__ = ["ShortBearing", "pressure", "short_film_force", "short_velocity", "short_kernel", "short_load"]
 
 _NEWTON_MAX_ITER = 60
 _NEWTON_RTOL = 1e-12
@@ -236,6 +236,36 @@ def short_kernel(ex, ey, fx, fy, omega, params):
     """:func:`short_velocity` with ``params = (c, L, D, mu, nodes, weights)``."""
     return short_velocity(ex, ey, fx, fy, omega, params[0], params[1], params[2], params[3],
                           params[4], params[5])
+
+
+@njit
+def short_load(ex, ey, vx, vy, omega, params):
+    r"""The load under which Method 1 moves the journal at ė = (vx, vy) [m/s], and ∂ė/∂F there: the inverse of
+    :func:`short_kernel` in closed form, with ``params = (c, L, D, mu, nodes, weights)``.
+
+    Eq. (6) of [1]_ read the other way: the positive film's force at the squeeze velocity u = ė + (ω/2) k × e
+    balances the load,
+
+    .. math::
+        \mathbf F = -\mathbf F_{film}(\mathbf u),\qquad
+        \frac{\partial\dot{\mathbf e}}{\partial\mathbf F} = A^{-1},\quad A = -\frac{\partial\mathbf F_{film}}
+        {\partial\mathbf u}
+
+    (the film's edges carry no pressure, so A is the Jacobian :func:`_pi_film` integrates; it is symmetric
+    positive definite for |e| < c).  One film integral, where :func:`short_kernel` iterates Newton on it.
+
+    Returns
+    -------
+    tuple of float
+        ``(F_x, F_y, G_xx, G_xy, G_yx, G_yy)``: the load [N] and ∂ė/∂F row-major [m/(s·N)].
+    """
+    c, length, diameter, mu, nodes, weights = params
+    ex, ey = cap_eccentricity(ex, ey, c)
+    ux = vx + 0.5 * omega * ey          # u = ė + (ω/2) k × e, as in :func:`short_velocity`
+    uy = vy - 0.5 * omega * ex
+    gx, gy, a11, a12, a22 = _pi_film(ex, ey, ux, uy, c, length, 0.5 * diameter, mu, nodes, weights)
+    det = a11 * a22 - a12 * a12
+    return -gx, -gy, a22 / det, -a12 / det, -a12 / det, a11 / det
 
 
 class ShortBearing(KernelBearing):

@@ -48,7 +48,7 @@ import math
 
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
-from ..bearing.short_bearing import short_kernel
+from ..bearing.short_bearing import short_kernel, short_load
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, gap_coefficients, locate
 from .loads import journal_torque
@@ -56,8 +56,8 @@ from .tooth_constraint import constrained_velocity, contact_pair, projected_mobi
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
-           "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact",
-           "FULL_ITERATIONS", "FULL_RTOL"]
+           "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact", "short_in_contact",
+           "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -236,15 +236,15 @@ def load_step(fx, fy):
 
 
 @njit(inline="always")
-def set_velocity(gc, fx, fy, v0, v1, v2, d):
-    """Store F₀ = (fx, fy) [N], ė₀ = v0 and G from v1 = M(F₀ + d x̂), v2 = M(F₀ + d ŷ) [m/s] (d [N]); start the
-    step's ∫ė dt and switch the coupling on."""
+def set_linearisation(gc, fx, fy, vx, vy, gxx, gxy, gyx, gyy):
+    """Store F₀ = (fx, fy) [N], ė₀ = (vx, vy) [m/s] and G row-major [m/(s·N)]; start the step's ∫ė dt and switch
+    the coupling on (the tooth constraint off until :func:`set_constraint`)."""
     gc[GC_F0X], gc[GC_F0Y] = fx, fy
-    gc[GC_V0X], gc[GC_V0Y] = v0[0], v0[1]
-    gc[GC_GXX], gc[GC_GYX] = (v1[0] - v0[0]) / d, (v1[1] - v0[1]) / d
-    gc[GC_GXY], gc[GC_GYY] = (v2[0] - v0[0]) / d, (v2[1] - v0[1]) / d
-    gc[GC_VX], gc[GC_VY] = v0[0], v0[1]
-    gc[GC_VPX], gc[GC_VPY] = v0[0], v0[1]
+    gc[GC_V0X], gc[GC_V0Y] = vx, vy
+    gc[GC_GXX], gc[GC_GYX] = gxx, gyx
+    gc[GC_GXY], gc[GC_GYY] = gxy, gyy
+    gc[GC_VX], gc[GC_VY] = vx, vy
+    gc[GC_VPX], gc[GC_VPY] = vx, vy
     gc[GC_DEX] = 0.0
     gc[GC_DEY] = 0.0
     gc[GC_PEND] = 0.0
@@ -252,6 +252,14 @@ def set_velocity(gc, fx, fy, v0, v1, v2, d):
     gc[GC_LAM1] = 0.0
     gc[GC_LAM2] = 0.0
     gc[GC_ON] = 1.0
+
+
+@njit(inline="always")
+def set_velocity(gc, fx, fy, v0, v1, v2, d):
+    """:func:`set_linearisation` at F₀ = (fx, fy) [N] with ė₀ = v0 and G from v1 = M(F₀ + d x̂), v2 = M(F₀ + d ŷ)
+    [m/s] (d [N])."""
+    set_linearisation(gc, fx, fy, v0[0], v0[1], (v1[0] - v0[0]) / d, (v2[0] - v0[0]) / d, (v1[1] - v0[1]) / d,
+                      (v2[1] - v0[1]) / d)
 
 
 @njit(inline="always")
@@ -357,6 +365,44 @@ def linearise_in_contact(ex, ey, omega, km, gc):
     return FULL_ITERATIONS + 1
 
 
+@njit
+def short_in_contact(params, ex, ey, omega2, gc):
+    r""":func:`linearise_in_contact` for Method 1 (``params``: :func:`.short_bearing.short_kernel`'s), Josephy–Newton
+    in the film's own form: each iterate is a velocity, its load and G one film integral away.
+
+    Method 1 is the film's force as a function of the journal's velocity, inverted by Newton in
+    :func:`.short_bearing.short_kernel`; :func:`linearise_in_contact`'s iteration through that inverse would take
+    three Newton solves per iterate (ė₀ and two for G).  Here the iterate is ė itself: the load it takes and G there
+    are :func:`.short_bearing.short_load`'s closed form, linearised about them the constrained velocity at the free
+    load F₀ (:func:`gear_velocity`: the two-contact LCP of the same Josephy–Newton step) is the next iterate.  The
+    fixed point is the same, ė = M(e, F₀ + λ₁n₁ + λ₂n₂) with the gaps held; converged and left as
+    :func:`linearise_in_contact` leaves it (F₀ in ``gc`` the load of the last iterate, which the step's load
+    change is taken from).  Call after :func:`set_constraint`.  Returns the iterations (:data:`FULL_ITERATIONS` + 1:
+    not converged; 0: off the teeth).
+    """
+    l1, l2 = held_reactions(gc)
+    if l1 == 0.0 and l2 == 0.0:
+        return 0
+    fx, fy = gc[GC_F0X], gc[GC_F0Y]
+    c = gc[GC_PAIR:GC_PAIR + 10]
+    vx, vy = gear_velocity(fx, fy, gc)
+    done = FULL_ITERATIONS + 1
+    for it in range(FULL_ITERATIONS):
+        lx, ly, gxx, gxy, gyx, gyy = short_load(ex, ey, vx, vy, omega2, params)
+        set_linearisation(gc, lx, ly, vx, vy, gxx, gxy, gyx, gyy)
+        contact_pair(gxx, gxy, gyx, gyy, c[0], c[1], c[2], c[3], c[8], c[9], c)
+        gc[GC_CON] = 1.0
+        vx, vy = gear_velocity(fx, fy, gc)
+        m1, m2 = gc[GC_LAM1], gc[GC_LAM2]
+        if abs(m1 - l1) + abs(m2 - l2) <= FULL_RTOL * (math.hypot(fx, fy) + m1 + m2):
+            done = it + 1
+            break
+        l1, l2 = m1, m2
+    gc[GC_LAM1] = 0.0                       # as :func:`set_velocity` leaves them: the step's own right-hand sides
+    gc[GC_LAM2] = 0.0
+    return done
+
+
 @njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
 def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
@@ -372,36 +418,32 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
 
 @njit
 def linearise_short(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, constrained):
-    """:func:`linearise_with` for Method 1 (:func:`~gerotor_twin.bearing.short_bearing.short_kernel`, ``params`` its
-    parameters) compiled: the same calls in the same order, from :func:`.kernel.integrate_short` without a return
-    to Python per output step; the tooth constraint set up where ``constrained``."""
+    """Set up the coupling of the next output step with Method 1's film (:func:`linearise` with
+    :func:`~gerotor_twin.bearing.short_bearing.short_kernel`, ``params`` its parameters), compiled: ė₀ by the film's
+    Newton solve, G in closed form there (:func:`~gerotor_twin.bearing.short_bearing.short_load`: A⁻¹, where the
+    other films take finite differences), and where ``constrained`` the tooth constraint with the reactions through
+    the film (:func:`short_in_contact`).  Called by :func:`.kernel.integrate_short` without a return to Python per
+    output step, and by :func:`linearise_with` for Method 1 (the Python loop)."""
     fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     omega2 = omega * (km.pc.n - 1) / km.pc.n
-    d = load_step(fx, fy)
-    set_velocity(gc, fx, fy, short_kernel(ex, ey, fx, fy, omega2, params),
-                 short_kernel(ex, ey, fx + d, fy, omega2, params), short_kernel(ex, ey, fx, fy + d, omega2, params), d)
+    vx, vy = short_kernel(ex, ey, fx, fy, omega2, params)
+    _lx, _ly, gxx, gxy, gyx, gyy = short_load(ex, ey, vx, vy, omega2, params)     # G in closed form at ė₀
+    set_linearisation(gc, fx, fy, vx, vy, gxx, gxy, gyx, gyy)
     if constrained and h > 0.0:
         set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
-        l1, l2 = held_reactions(gc)            # on the teeth: :func:`linearise_in_contact` with Method 1's film
-        if l1 != 0.0 or l2 != 0.0:
-            for _ in range(FULL_ITERATIONS):
-                gx, gy = contact_load(fx, fy, l1, l2, gc)
-                d = load_step(gx, gy)
-                set_velocity(gc, gx, gy, short_kernel(ex, ey, gx, gy, omega2, params),
-                             short_kernel(ex, ey, gx + d, gy, omega2, params),
-                             short_kernel(ex, ey, gx, gy + d, omega2, params), d)
-                l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
-                if done:
-                    break
+        short_in_contact(params, ex, ey, omega2, gc)
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):
     """:func:`linearise` with another bearing model's velocity kernel (Method 1, FDM), from Python: numba caches
     no compiled function that takes a function."""
+    k, bp = bearing.kernel, bearing.params
+    if k is short_kernel:                       # Method 1: its compiled set-up, G and the contact in closed form
+        linearise_short(bp, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, km.pc.gear_constrained)
+        return
     fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     omega2 = omega * (km.pc.n - 1) / km.pc.n
     d = load_step(fx, fy)
-    k, bp = bearing.kernel, bearing.params
     set_velocity(gc, fx, fy, k(ex, ey, fx, fy, omega2, bp), k(ex, ey, fx + d, fy, omega2, bp),
                  k(ex, ey, fx, fy + d, omega2, bp), d)
     if km.pc.gear_constrained and h > 0.0:
