@@ -248,3 +248,26 @@ def test_the_reference_point_and_the_startup_check_leave_the_live_model_as_it_is
     for f, before in ws.items():
         assert np.array_equal(getattr(m._ws, f), before, equal_nan=True), f
     assert m.replica().tables is m.tables
+
+
+def test_the_level_judges_the_named_faults_loss(monitor):
+    """Behaviour: the status level judges the leakage factor's drop until the classifier names a fault of the flow,
+    then that fault's loss at the reference point (``alarm_drop_pt``: the fitted θ through
+    ``SteadySignatures.reference_loss``); ``unknown`` and ``healthy`` leave it to the leakage factor.  Here the
+    pump leaks as the model does (drop ≈ 0) and a named meter gain whose θ stands for a 6 pt loss raises ERROR,
+    one for 3 pt WARN."""
+    from types import SimpleNamespace
+    from gerotor_twin.twin.diagnosis import Diagnosis
+    Feed(monitor).run(6.0, 1.0)
+    assert abs(monitor.drop_pt()) < 1.0 and monitor.level() == m.DIAG_OK
+    monitor._signature_of = SimpleNamespace(reference_loss=lambda kind, theta: -theta)   # a meter gain's sign
+    for theta, want in ((-0.06, m.DIAG_ERROR), (-0.03, m.DIAG_WARN), (0.01, m.DIAG_OK)):
+        monitor.diagnosis = Diagnosis("flowmeter_drift", 0.99, {}, {}, {"flowmeter_drift": theta}, 1.0, 12)
+        assert monitor.alarm_drop_pt() == pytest.approx(-100 * theta)
+        assert monitor.level() == want
+    assert "its loss at the reference point +3.00 pt" not in monitor.status()["message"]
+    monitor.diagnosis = Diagnosis("flowmeter_drift", 0.99, {}, {}, {"flowmeter_drift": -0.03}, 1.0, 12)
+    assert "its loss at the reference point +3.00 pt" in monitor.status()["message"]
+    for kind in ("unknown", "healthy"):
+        monitor.diagnosis = Diagnosis(kind, 0.99, {}, {}, {"flowmeter_drift": -0.06}, 1.0, 12)
+        assert monitor.alarm_drop_pt() == monitor.drop_pt() and monitor.level() == m.DIAG_OK

@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gerotor_twin.errors import InputError, check_int, check_ranges
+from gerotor_twin.units import celsius_to_kelvin
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
            "kind_log_likelihood", "classify", "point_key", "operating_points", "missing_fraction", "KIND_CODES"]
@@ -425,12 +426,14 @@ class SteadySignatures:
     model) runs :func:`~gerotor_twin.model.steady.run_steady` at the window's speed, pressures and oil
     temperature, as configured and with each perturbation; the cache key rounds the operating point to
     ``rpm_step`` [rpm], ``pressure_step_pa`` [Pa] and ``oil_step_k`` [K].  Columns are scaled by their
-    value at the reference point (module doc).  :meth:`relinearised` gives a kind's column re-linearised at a
-    fitted fault size (the finite difference taken with that size as its step).
+    value at the reference point (module doc), ``reference`` = (speed [rpm], delivery pressure [bar gauge], oil
+    [°C] or None for the config's reference temperature; the health monitor passes its own reference point).
+    :meth:`relinearised` gives a kind's column re-linearised at a fitted fault size (the finite difference taken
+    with that size as its step).
     """
 
     def __init__(self, config, bearing: str = "mobility", settings: DiagnosisSettings | None = None,
-                 reference: tuple[float, float] = (1500.0, 20.0), rpm_step: float = 10.0,
+                 reference: tuple = (1500.0, 20.0, None), rpm_step: float = 10.0,
                  pressure_step_pa: float = 5e3, oil_step_k: float = 1.0):
         from gerotor_twin.model.pump import PumpModel
         self.config, self.settings = config, settings or DiagnosisSettings()
@@ -439,11 +442,21 @@ class SteadySignatures:
         self._cache: dict = {}
         self._sized: dict = {}
         self.p_atm = config.fluid.atmospheric_pa
-        rpm, bar = reference
-        self.reference_op = (rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, None)
+        rpm, bar, *oil = reference         # oil [°C] or None: the config's reference temperature
+        oil_k = None if not oil or oil[0] is None else celsius_to_kelvin(oil[0])
+        self.reference_op = (rpm, self.p_atm + bar * 1e5, config.boundary.suction_pressure_pa, oil_k)
         ref = self._raw(self.reference_op)
         self._reference = ref["q0"], ref["q_th"]
         self.scale = {k: ref["q_th"] / abs(ref[k]) if ref[k] != 0 else 1.0 for k in FLOW_KINDS}
+        self._sign = {k: -1.0 if ref[k] < 0 else 1.0 for k in FLOW_KINDS}
+
+    def reference_loss(self, kind: str, theta: float) -> float:
+        """Loss of volumetric efficiency at the reference point [-] of the fault ``kind`` fitted at θ [-].
+
+        θ is the fault's flow change there over the theoretical flow, in the direction of its signature's
+        step (module doc), so the loss is −θ times the sign of that step's flow change: θ itself for a wear or
+        air ingress, −g·η_v for a meter gain g (θ = g·η_v)."""
+        return -theta * self._sign[kind]
 
     def _q(self, op: tuple, kind: str | None = None, size: float = 0.0) -> tuple[float, float]:
         """Mean delivery and theoretical flow [m³/s] at ``op`` (rpm, delivery and suction pressure [Pa], oil [K]

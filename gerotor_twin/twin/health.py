@@ -40,7 +40,9 @@ Status (``/diagnostics`` ``gerotor_twin: health``)
     STALE until ``min_updates`` updates (no measured flow, or never steady); ERROR when
     the reference efficiency fell more than ``error_pt`` points below the calibrated
     one; WARN above ``warn_pt`` points, or when the normalised innovation stayed beyond
-    ``residual_band`` for ``band_updates`` consecutive updates; OK otherwise.
+    ``residual_band`` for ``band_updates`` consecutive updates; OK otherwise.  The fall judged is
+    the leakage factor's until the classifier names a fault of the flow, then that fault's loss at the
+    reference point (:meth:`HealthMonitor.alarm_drop_pt`).
 ``adapt``
     False (default): a pure monitor, the model keeps its configured leakage.  True:
     after each update that moved k by more than 1 % from the factor in use, the model's
@@ -57,7 +59,7 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.diagnosis import KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
+from gerotor_twin.twin.diagnosis import FLOW_KINDS, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
@@ -414,7 +416,7 @@ class HealthMonitor:
                 self._signature_of = SteadySignatures(
                     self.base_config, getattr(self.model, "bearing_name", "mobility"),
                     DiagnosisSettings(point_speed_tol=s.speed_tol, point_pressure_pa=s.pressure_tol_pa),
-                    reference=(s.reference_rpm, s.reference_bar))
+                    reference=(s.reference_rpm, s.reference_bar, s.reference_oil_c))
             signature = self._signature_of(rec)
         except InputError:
             return                  # outside the pump's range (a steady model cannot run there): not classified
@@ -439,13 +441,29 @@ class HealthMonitor:
         """Fall of the reference efficiency from the calibrated value [percentage points]."""
         return 100.0 * (self.reference_efficiency(1.0) - self.reference_efficiency(self.est.k))
 
+    def alarm_drop_pt(self) -> float:
+        """The loss at the reference point the status level judges [percentage points].
+
+        Once the classifier names a fault of the flow (:data:`~.diagnosis.FLOW_KINDS`, seen at two operating
+        points or more), that fault's loss there at its fitted size (the latest window's θ,
+        :meth:`~.diagnosis.SteadySignatures.reference_loss`); otherwise the leakage factor's (:meth:`drop_pt`).
+        The leakage factor reads every loss as leakage, whose share grows with the delivery pressure, so it
+        extrapolates a meter gain, air or a pressure offset seen at a low pressure to a larger loss at the
+        reference point and one seen at a high pressure to a smaller one: the level would change with the
+        operating point under a constant fault."""
+        d, sig = self.diagnosis, self._signature_of
+        if d is not None and sig is not None and d.kind in FLOW_KINDS and d.kind in d.parameter:
+            return 100.0 * sig.reference_loss(d.kind, d.parameter[d.kind])
+        return self.drop_pt()
+
     def level(self) -> int:
         s = self.settings
         if self.est.updates < s.min_updates:
             return m.DIAG_STALE
-        if self.drop_pt() > s.error_pt:
+        drop = self.alarm_drop_pt()
+        if drop > s.error_pt:
             return m.DIAG_ERROR
-        if self.drop_pt() > s.warn_pt or self._out_of_band >= s.band_updates:
+        if drop > s.warn_pt or self._out_of_band >= s.band_updates:
             return m.DIAG_WARN
         return m.DIAG_OK
 
@@ -482,10 +500,13 @@ class HealthMonitor:
             if self.diagnosis is not None:
                 d = self.diagnosis
                 text += f"; fault: {d.kind} (probability {d.confidence:.2f} over {d.windows} intervals)"
+                if d.kind in FLOW_KINDS:
+                    text += f", its loss at the reference point {self.alarm_drop_pt():+.2f} pt (the level's)"
         vals = {k: f"{x:.6g}" for k, x in v.items()}
         vals.update({"adapt": str(s.adapt).lower(), "reference_rpm": f"{s.reference_rpm:g}",
                      "reference_bar": f"{s.reference_bar:g}", "reference_oil_c": f"{s.reference_oil_c:g}",
-                     "drop_pt": f"{self.drop_pt():.3f}", "model_eta_sd_from_calibration": f"{self.eta_rmse_cal:.4g}"})
+                     "drop_pt": f"{self.drop_pt():.3f}", "alarm_drop_pt": f"{self.alarm_drop_pt():.3f}",
+                     "model_eta_sd_from_calibration": f"{self.eta_rmse_cal:.4g}"})
         if self.diagnosis is not None:
             vals.update({"fault": self.diagnosis.kind, "speed_samples_missing": f"{self.diagnosis.dropout:.4f}"})
         return m.diagnostic_status(lvl, HEALTH_STATUS, text, values=vals)
