@@ -281,19 +281,19 @@ def test_operating_points_by_tolerance_closed_form():
     assert operating_points(plateau + [rec(2500.0, 6.0e5)], 0.01, 5e4) == 2
 
 
-@pytest.mark.parametrize("kind", [k for k in CASES if k != "healthy"])
-def test_reference_loss_is_the_fault_loss_at_the_reference_point(plant, kind):
+@pytest.mark.parametrize("kind,fault,gain", [(k, *CASES[k]) for k in CASES if k != "healthy"]
+                         + [("pressure_offset", {"offset_pa": -2e5}, 0.0)])
+def test_reference_loss_is_the_fault_loss_at_the_reference_point(plant, kind, fault, gain):
     """Behaviour (known truth): the loss at the health monitor's reference point (1500 rpm, 20 bar, 50 °C) that the
     fitted θ of the named kind stands for (``SteadySignatures.reference_loss``, what the status level judges once
     the classifier names a flow fault) is the fault's apparent loss there, computed apart from the classifier with
     the fault applied in full in the twin's steady model: q_twin − q_meter over the theoretical flow (a meter gain g:
     −g·η_v; an offset: the pump at the pressure read less the offset), within 10 % and 0.2 pt.  With the signatures'
     reference at the config's reference oil temperature instead, the wears' θ read 0.65–0.66 of it and the offset's
-    0.57 (measured)."""
+    0.57 (measured); a transducer reading 2 bar low, +2.7 pt."""
     from gerotor_twin.offline.diagnosis_bench import _flow
     cfg, _ = plant
     sig = SteadySignatures(cfg, reference=(1500.0, 20.0, 50.0))
-    fault, gain = CASES[kind]
     recs = _records(cfg, fault, gain)
     d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
     assert d.kind == kind, d.probability
@@ -302,3 +302,17 @@ def test_reference_loss_is_the_fault_loss_at_the_reference_point(plant, kind):
     loss = (ref.mean_delivery_flow_m3s - true) / ref.theoretical_flow_m3s
     got = sig.reference_loss(kind, d.parameter[kind])
     assert abs(got - loss) <= 0.1 * abs(loss) + 0.002, (got, loss)
+
+
+def test_relinearised_offset_read_low_keeps_the_direction(plant):
+    """Behaviour: a pressure offset may lie on either side of no fault; re-linearised at a size read low (θ < 0,
+    two steps: a pump at 27 bar read as 25) the secant is taken on that side (n' < 0) and θ keeps the unit step's direction: each record's
+    column has the sign of the linear signature's and its size within 25 % of it.  (Scaled by the reference
+    point's |change|, the column flipped sign and θ with it: a 3 bar offset read low at 1000 / 2500 rpm was
+    published as a loss of −4.1 pt where the truth is +4.1.)"""
+    cfg, sig = plant
+    recs = _records(cfg, {})
+    lin = np.array([sig(r)["pressure_offset"] for r in recs])
+    col, n = sig.relinearised(recs, "pressure_offset", -2.0 / sig.scale["pressure_offset"])
+    assert n < -1.0
+    assert np.all(np.sign(col) == np.sign(lin)) and np.allclose(col, lin, rtol=0.25), (col, lin)

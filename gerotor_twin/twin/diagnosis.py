@@ -521,7 +521,8 @@ class SteadySignatures:
         ``steps`` (n, in finite-difference steps; 1: the linear signature), it corresponds to n' = θ / c(n)
         steps, c(n) the reference point's |flow change| / theoretical flow per step at n.  The column becomes
         the secant from no fault to n' steps, (Q(n') − Q) at each record's operating point scaled by
-        theoretical flow / |Q(n') − Q| at the reference point, so that θ keeps its meaning (and its prior).
+        theoretical flow / (Q(n') − Q) at the reference point times the sign of one step's flow change there, so
+        that θ keeps its meaning (and its prior) on either side of no fault (a pressure offset read low: n' < 0).
         n' is rounded to a quarter octave (2^(j/4)) so that nearby fits share the cached steady runs.  None —
         keep the linear column — for the flow-meter gain (linear), within one step (|n'| ≤ 1: the finite
         difference interpolates there), in the direction the fault cannot have (:data:`_SIGN`), beyond a loss of
@@ -543,13 +544,14 @@ class SteadySignatures:
             if not abs(n) > 1.0:
                 return None
             n = math.copysign(2.0 ** (round(4.0 * math.log2(abs(n))) / 4.0), n)
-            ref = abs(self._change("reference", q0_ref, kind, n))
-            if not ref > 0.0:
+            ref = self._change("reference", q0_ref, kind, n)
+            if not abs(ref) > 0.0:
                 return None                     # the fault moves no flow at the reference point: θ has no scale
+            scale = qth_ref * self._sign[kind] / ref    # θ in the unit step's direction, whichever way n goes
             out = []
             for rec in records:
                 key, raw = self._point(rec)
-                out.append(self._change(key, raw["q0"], kind, n) / ref * qth_ref)
+                out.append(self._change(key, raw["q0"], kind, n) * scale)
         except InputError:
             return None
         return out, n
