@@ -427,13 +427,14 @@ class SteadySignatures:
     temperature, as configured and with each perturbation; the cache key rounds the operating point to
     ``rpm_step`` [rpm], ``pressure_step_pa`` [Pa] and ``oil_step_k`` [K].  Columns are scaled by their
     value at the reference point (module doc), ``reference`` = (speed [rpm], delivery pressure [bar gauge], oil
-    [°C] or None for the config's reference temperature; the health monitor passes its own reference point).
+    [°C] or None for the config's reference temperature; default the health monitor's default, which passes its
+    own).
     :meth:`relinearised` gives a kind's column re-linearised at a fitted fault size (the finite difference taken
     with that size as its step).
     """
 
     def __init__(self, config, bearing: str = "mobility", settings: DiagnosisSettings | None = None,
-                 reference: tuple = (1500.0, 20.0, None), rpm_step: float = 10.0,
+                 reference: tuple = (1500.0, 20.0, 50.0), rpm_step: float = 10.0,
                  pressure_step_pa: float = 5e3, oil_step_k: float = 1.0):
         from gerotor_twin.model.pump import PumpModel
         self.config, self.settings = config, settings or DiagnosisSettings()
