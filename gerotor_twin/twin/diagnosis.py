@@ -479,10 +479,19 @@ class SteadySignatures:
                 take_config(self.model, base)
         return res.mean_delivery_flow_m3s, res.theoretical_flow_m3s
 
+    def _step_change(self, op: tuple, q0: float, kind: str, h: float) -> float:
+        """Flow change [m³/s] of one step h of ``kind`` at ``op``; where the step would leave the pump's range (a
+        pressure offset at a delivery pressure below one step: an open-circuit lube pump near 0 bar), the step
+        the other way, sign reversed — the column is a derivative, which either one-sided difference takes."""
+        try:
+            return self._q(op, kind, h)[0] - q0
+        except InputError:
+            return q0 - self._q(op, kind, -h)[0]
+
     def _raw(self, op: tuple) -> dict:
         """Unscaled flow changes [m³/s] per perturbation (of its step) at one operating point."""
         q0, qth = self._q(op)
-        out = {k: self._q(op, k, getattr(self.settings, step))[0] - q0 for k, step in _STEP.items()}
+        out = {k: self._step_change(op, q0, k, getattr(self.settings, step)) for k, step in _STEP.items()}
         out.update(flowmeter_drift=q0, q0=q0, q_th=qth)
         return out
 
