@@ -114,3 +114,27 @@ def test_clipping_only_removes_negative_pressure():
     pos = np.maximum(p, 0.0).sum(axis=1) * gr.dx * gr.dy
     ref = -np.array([np.sum(pos * gr.cos_t), np.sum(pos * gr.sin_t)])     # Eqs. (17)-(18)
     np.testing.assert_allclose(model.film_force(e, e_dot, OMEGA), ref, rtol=1e-12)
+
+
+def test_fdm_load():
+    """Closed form: ``fdm_load`` is the FDM's Eq. (19) read the other way: the FDM velocity kernel (its own Newton
+    solve) moves the journal at ė under the load ``fdm_load`` gives for ė (1e-9 of the speed), and its ∂ė/∂F is the
+    kernel's central difference in the load (1e-5 of |G|, the clipped force piecewise linear in ė)."""
+    from gerotor_twin.bearing.reynolds_fd import fd_fields, fdm_load
+    model = make_bearing("fdm", TABLE1, nx=80, ny=12)
+    c, _l, d, mu, dx, dy, cos_t, sin_t, lam, synth = model.params
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        eps, a = rng.uniform(0.1, 0.8), rng.uniform(-math.pi, math.pi)
+        e = eps * c * np.array([math.cos(a), math.sin(a)])
+        e_dot = rng.normal(size=2) * 10.0 ** rng.uniform(-4, -2)
+        omega = rng.choice([0.0, 50.0, 300.0])
+        fields = fd_fields(e[0], e[1], omega, c, 0.5 * d, mu, dx, cos_t, sin_t, lam, synth)
+        got = np.array(fdm_load(*fields, e_dot[0], e_dot[1], cos_t, sin_t, dx * dy))
+        v = np.array(model.kernel(e[0], e[1], got[0], got[1], omega, model.params))
+        np.testing.assert_allclose(v, e_dot, rtol=0.0, atol=1e-9 * np.linalg.norm(e_dot))
+        h = 1e-6 * np.linalg.norm(got[:2])
+        fd = np.column_stack([(np.array(model.kernel(e[0], e[1], *(got[:2] + h * u), omega, model.params))
+                               - np.array(model.kernel(e[0], e[1], *(got[:2] - h * u), omega, model.params))) / (2 * h)
+                              for u in np.eye(2)])
+        np.testing.assert_allclose(got[2:].reshape(2, 2), fd, rtol=0.0, atol=1e-5 * np.abs(fd).max())

@@ -146,32 +146,39 @@ def test_linearised_velocity_is_the_mobility_and_its_load_derivative(warm):
     assert np.abs(ours - g).max() <= 1e-5 * np.abs(g).max(), (ours, g)
 
 
-@pytest.mark.parametrize("film", ["mobility", "short"])
+@pytest.mark.parametrize("film", ["mobility", "short", "fdm"])
 def test_a_step_on_the_teeth_starts_with_the_full_mobility(warm, film):
     """Closed form: where the step starts with a lobe holding the gear (its gap's rate under the free motion < 0),
-    ``linearise_in_contact`` (the mobility method; Method 1: ``short_in_contact``, the iteration in the film's own
-    form) moves ė₀ and G to the load the film carries, so the step's constrained velocity at
+    ``linearise_in_contact`` (the mobility method; Method 1 and the FDM film: ``short_in_contact``,
+    ``fdm_in_contact``, the iteration in the film's own form) moves ė₀ and G to the load the film carries, so the
+    step's constrained velocity at
     its start load F₀ is the film's velocity at F₀ + λn itself (1e-9) and holds the gap (n·ė + r = 0); the reaction
     through G at the free load alone leaves the gap closing at more than 1 % of the free speed when the film is
     asked for its own velocity.  A step whose gaps the free motion opens keeps the linearisation at F₀ bit for bit;
     a gear wedged between two lobes at zero rates stands still under reactions the film itself answers with ė = 0."""
     from gerotor_twin.bearing import make_bearing
-    from gerotor_twin.bearing.short_bearing import short_kernel
+    from gerotor_twin.bearing.reynolds_fd import fd_fields
     m, inp, s = warm
     pc = m.kernel.pc
     ex, ey = s.eccentricity
     w2 = inp.omega * (m.N - 1) / m.N
-    params = make_bearing("short", m.bearing_geometry).params
+    if film != "mobility":
+        bearing = make_bearing(film, m.bearing_geometry)
+        params = bearing.params
 
     def v(a, b):
-        if film == "short":
-            return np.array(short_kernel(ex, ey, a, b, w2, params))
+        if film != "mobility":
+            return np.array(bearing.kernel(ex, ey, a, b, w2, params))
         return np.array(mobility_velocity(ex, ey, a, b, w2, pc.housing_clearance, pc.width, 2 * pc.journal_radius,
                                           pc.viscosity))
 
     def solve(gc):
         if film == "short":
             return GC.short_in_contact(params, ex, ey, w2, gc)
+        if film == "fdm":
+            c, _l, d, mu, dx, dy, cos_t, sin_t, lam, synth = params
+            fields = fd_fields(ex, ey, w2, c, 0.5 * d, mu, dx, cos_t, sin_t, lam, synth)
+            return GC.fdm_in_contact(*fields, cos_t, sin_t, dx * dy, gc)
         return GC.linearise_in_contact(ex, ey, inp.omega, m.kernel, gc)
 
     def coupling(f, rates, n1=(0.8, 0.6), n2=(-1.0, 0.0)):

@@ -57,8 +57,8 @@ from gerotor_twin.bearing.geometry import BearingGeometry
 from gerotor_twin.bearing.mobility import mobility_velocity
 from gerotor_twin.errors import InputError
 
-__all__ = ["FdmBearing", "FdGrid", "make_grid", "fd_fields", "fdm_velocity", "fdm_kernel",
-           "parse_grid"]
+__all__ = ["FdmBearing", "FdGrid", "make_grid", "fd_fields", "fdm_velocity", "fdm_kernel", "velocity_from_fields",
+           "fdm_load", "parse_grid"]
 
 _NEWTON_MAX_ITER = 60
 _NEWTON_RTOL = 1e-12
@@ -267,6 +267,19 @@ def _full_jacobian(p_x, p_y, cos_t, sin_t, area):
 
 
 @njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
+def _invertible(j11, j12, j21, j22, p_x, p_y, cos_t, sin_t, area):
+    """The clipped force's Jacobian and its determinant, or the unclipped one's where no loaded node makes it
+    singular."""
+    det = j11 * j22 - j12 * j21
+    jn = abs(j11) + abs(j12) + abs(j21) + abs(j22)
+    if abs(det) <= 1e-14 * jn * jn:
+        fj = _full_jacobian(p_x, p_y, cos_t, sin_t, area)
+        j11, j12, j21, j22 = fj[0], fj[1], fj[2], fj[3]
+        det = j11 * j22 - j12 * j21
+    return j11, j12, j21, j22, det
+
+
+@njit(_nrt=True)     # allocates arrays: with numba's reference counting (gerotor_twin._jit)
 def fdm_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu, dx, dy, cos_t, sin_t, lam,
                  synth):
     """Journal-centre velocity by the FDM: solve Eq. (19) of [1]_ for ``e_dot`` [m/s].
@@ -294,8 +307,14 @@ def fdm_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu, dx, dy, cos_t, 
         ``(de_x/dt, de_y/dt)`` [m/s].
     """
     ex, ey = cap_eccentricity(ex, ey, c)
-    area = dx * dy
     p_w, p_x, p_y = fd_fields(ex, ey, omega, c, 0.5 * diameter, mu, dx, cos_t, sin_t, lam, synth)
+    return velocity_from_fields(p_w, p_x, p_y, ex, ey, fx, fy, omega, c, length, diameter, mu, dx * dy, cos_t, sin_t)
+
+
+@njit(_nrt=True)     # allocates arrays (the fallback Jacobian): with numba's reference counting
+def velocity_from_fields(p_w, p_x, p_y, ex, ey, fx, fy, omega, c, length, diameter, mu, area, cos_t, sin_t):
+    """:func:`fdm_velocity` from the fields of :func:`fd_fields` at (ex, ey) [m] (capped): Eq. (19) of [1]_ solved
+    for ė [m/s] by semismooth Newton from the mobility method's velocity; ``area`` = dx·dy [m²]."""
     vx, vy = mobility_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu)
     gx, gy, j11, j12, j21, j22 = _clipped_force(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area)
     rx = gx + fx  # Eq. (19): F_film + F_est = 0
@@ -305,12 +324,7 @@ def fdm_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu, dx, dy, cos_t, 
     for _ in range(_NEWTON_MAX_ITER):
         if res <= _NEWTON_RTOL * scale:
             break
-        det = j11 * j22 - j12 * j21
-        jn = abs(j11) + abs(j12) + abs(j21) + abs(j22)
-        if abs(det) <= 1e-14 * jn * jn:
-            fj = _full_jacobian(p_x, p_y, cos_t, sin_t, area)
-            j11, j12, j21, j22 = fj[0], fj[1], fj[2], fj[3]
-            det = j11 * j22 - j12 * j21
+        j11, j12, j21, j22, det = _invertible(j11, j12, j21, j22, p_x, p_y, cos_t, sin_t, area)
         sx = -(j22 * rx - j12 * ry) / det
         sy = -(j11 * ry - j21 * rx) / det
         lam_ = 1.0
@@ -328,6 +342,24 @@ def fdm_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu, dx, dy, cos_t, 
             break
         vx, vy, j11, j12, j21, j22, rx, ry, res = tx, ty, k11, k12, k21, k22, qx, qy, qn
     return vx, vy
+
+
+@njit(_nrt=True)     # allocates arrays (the fallback Jacobian): with numba's reference counting
+def fdm_load(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area):
+    r"""The load under which the FDM film moves the journal at ė = (vx, vy) [m/s], and ∂ė/∂F there, from the fields
+    of :func:`fd_fields` at its position: Eq. (19) of [1]_ read the other way,
+
+    .. math::
+        \mathbf F = -\mathbf F_{film}(\dot{\mathbf e}),\qquad
+        \frac{\partial\dot{\mathbf e}}{\partial\mathbf F} = -J^{-1},\quad J = \frac{\partial\mathbf F_{film}}
+        {\partial\dot{\mathbf e}}
+
+    (the clipped force is piecewise linear in ė, its Jacobian exact between the nodes' sign changes; where no node
+    carries pressure, the unclipped one's, as in :func:`velocity_from_fields`).  No Reynolds solve and no Newton:
+    one pass over the grid.  Returns ``(F_x, F_y, G_xx, G_xy, G_yx, G_yy)`` [N, m/(s·N)]."""
+    gx, gy, j11, j12, j21, j22 = _clipped_force(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area)
+    j11, j12, j21, j22, det = _invertible(j11, j12, j21, j22, p_x, p_y, cos_t, sin_t, area)
+    return -gx, -gy, -j22 / det, j12 / det, j21 / det, -j11 / det
 
 
 @njit

@@ -48,6 +48,8 @@ import math
 
 from .._jit import njit
 from ..bearing.mobility import mobility_kernel
+from ..bearing.base import cap_eccentricity
+from ..bearing.reynolds_fd import fd_fields, fdm_kernel, fdm_load, velocity_from_fields
 from ..bearing.short_bearing import short_kernel, short_load
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
 from .contact import column, gap_coefficients, locate
@@ -57,7 +59,7 @@ from .tooth_constraint import constrained_velocity, contact_pair, projected_mobi
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
            "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact", "short_in_contact",
-           "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL"]
+           "fdm_in_contact", "film_start", "film_iterate", "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -380,27 +382,58 @@ def short_in_contact(params, ex, ey, omega2, gc):
     change is taken from).  Call after :func:`set_constraint`.  Returns the iterations (:data:`FULL_ITERATIONS` + 1:
     not converged; 0: off the teeth).
     """
-    l1, l2 = held_reactions(gc)
-    if l1 == 0.0 and l2 == 0.0:
+    on, fx, fy, vx, vy, l1, l2 = film_start(gc)
+    if not on:
         return 0
-    fx, fy = gc[GC_F0X], gc[GC_F0Y]
-    c = gc[GC_PAIR:GC_PAIR + 10]
-    vx, vy = gear_velocity(fx, fy, gc)
-    done = FULL_ITERATIONS + 1
     for it in range(FULL_ITERATIONS):
         lx, ly, gxx, gxy, gyx, gyy = short_load(ex, ey, vx, vy, omega2, params)
-        set_linearisation(gc, lx, ly, vx, vy, gxx, gxy, gyx, gyy)
-        contact_pair(gxx, gxy, gyx, gyy, c[0], c[1], c[2], c[3], c[8], c[9], c)
-        gc[GC_CON] = 1.0
-        vx, vy = gear_velocity(fx, fy, gc)
-        m1, m2 = gc[GC_LAM1], gc[GC_LAM2]
-        if abs(m1 - l1) + abs(m2 - l2) <= FULL_RTOL * (math.hypot(fx, fy) + m1 + m2):
-            done = it + 1
-            break
-        l1, l2 = m1, m2
-    gc[GC_LAM1] = 0.0                       # as :func:`set_velocity` leaves them: the step's own right-hand sides
+        vx, vy, l1, l2, done = film_iterate(gc, fx, fy, l1, l2, lx, ly, vx, vy, gxx, gxy, gyx, gyy)
+        if done:
+            return it + 1
+    return FULL_ITERATIONS + 1
+
+
+@njit(_nrt=True)     # the FDM film's fallback Jacobian allocates: with numba's reference counting
+def fdm_in_contact(p_w, p_x, p_y, cos_t, sin_t, area, gc):
+    """:func:`short_in_contact` for the FDM film, from its fields at the gear's position (:func:`.reynolds_fd.fd_fields`
+    once per output step; each iterate's load and G by :func:`.reynolds_fd.fdm_load`, one pass over the grid)."""
+    on, fx, fy, vx, vy, l1, l2 = film_start(gc)
+    if not on:
+        return 0
+    for it in range(FULL_ITERATIONS):
+        lx, ly, gxx, gxy, gyx, gyy = fdm_load(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area)
+        vx, vy, l1, l2, done = film_iterate(gc, fx, fy, l1, l2, lx, ly, vx, vy, gxx, gxy, gyx, gyy)
+        if done:
+            return it + 1
+    return FULL_ITERATIONS + 1
+
+
+@njit(inline="always")
+def film_start(gc):
+    """The start of :func:`short_in_contact`'s iteration: on the teeth (the linearised reactions at the free load
+    not both zero), the free load F₀ [N], the constrained velocity there [m/s] and those reactions [N]."""
+    l1, l2 = held_reactions(gc)
+    fx, fy = gc[GC_F0X], gc[GC_F0Y]
+    vx, vy = gear_velocity(fx, fy, gc)
+    return l1 != 0.0 or l2 != 0.0, fx, fy, vx, vy, l1, l2
+
+
+@njit(inline="always")
+def film_iterate(gc, fx, fy, l1, l2, lx, ly, vx, vy, gxx, gxy, gyx, gyy):
+    """One Josephy–Newton iterate in a film's own form (:func:`short_in_contact`): the linearisation about the
+    velocity (vx, vy) [m/s], the load it takes (lx, ly) [N] and G there; returns the constrained velocity at the free
+    load (fx, fy) [N], its reactions and whether they moved by less than :data:`FULL_RTOL` of |F₀| + |λ| from
+    (l1, l2).  The reactions in ``gc`` are left at zero, as :func:`set_velocity` leaves them for the step's own
+    right-hand sides."""
+    set_linearisation(gc, lx, ly, vx, vy, gxx, gxy, gyx, gyy)
+    c = gc[GC_PAIR:GC_PAIR + 10]
+    contact_pair(gxx, gxy, gyx, gyy, c[0], c[1], c[2], c[3], c[8], c[9], c)
+    gc[GC_CON] = 1.0
+    vx, vy = gear_velocity(fx, fy, gc)
+    m1, m2 = gc[GC_LAM1], gc[GC_LAM2]
+    gc[GC_LAM1] = 0.0
     gc[GC_LAM2] = 0.0
-    return done
+    return vx, vy, m1, m2, abs(m1 - l1) + abs(m2 - l2) <= FULL_RTOL * (math.hypot(fx, fy) + m1 + m2)
 
 
 @njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
@@ -441,6 +474,9 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
     if k is short_kernel:                       # Method 1: its compiled set-up, G and the contact in closed form
         linearise_short(bp, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, km.pc.gear_constrained)
         return
+    if k is fdm_kernel:                         # the FDM film: its fields once, G and the contact from them
+        _linearise_fdm(bp, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat)
+        return
     fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     omega2 = omega * (km.pc.n - 1) / km.pc.n
     d = load_step(fx, fy)
@@ -457,6 +493,25 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
             l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
             if done:
                 break
+
+
+def _linearise_fdm(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):
+    """:func:`linearise_with` for the FDM film (``params``: :func:`.reynolds_fd.fdm_kernel`'s): its three Reynolds
+    solves once at the gear's position, ė₀ by its Newton from them, G in closed form there
+    (:func:`.reynolds_fd.fdm_load`), on the teeth :func:`fdm_in_contact` — where its velocity kernel would solve
+    Reynolds again for each of three calls per Josephy–Newton iterate."""
+    c, length, diameter, mu, dx, dy, cos_t, sin_t, lam, synth = params
+    fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
+    omega2 = omega * (km.pc.n - 1) / km.pc.n
+    exc, eyc = cap_eccentricity(ex, ey, c)
+    p_w, p_x, p_y = fd_fields(exc, eyc, omega2, c, 0.5 * diameter, mu, dx, cos_t, sin_t, lam, synth)
+    area = dx * dy
+    vx, vy = velocity_from_fields(p_w, p_x, p_y, exc, eyc, fx, fy, omega2, c, length, diameter, mu, area, cos_t, sin_t)
+    _lx, _ly, gxx, gxy, gyx, gyy = fdm_load(p_w, p_x, p_y, vx, vy, cos_t, sin_t, area)
+    set_linearisation(gc, fx, fy, vx, vy, gxx, gxy, gyx, gyy)
+    if km.pc.gear_constrained and h > 0.0:
+        set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
+        fdm_in_contact(p_w, p_x, p_y, cos_t, sin_t, area, gc)
 
 
 @njit(inline="always")
