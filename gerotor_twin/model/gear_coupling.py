@@ -412,10 +412,8 @@ def fdm_in_contact(p_w, p_x, p_y, cos_t, sin_t, area, gc):
 def film_start(gc):
     """The start of :func:`short_in_contact`'s iteration: on the teeth (the linearised reactions at the free load
     not both zero), the free load F₀ [N], the constrained velocity there [m/s] and those reactions [N]."""
-    l1, l2 = held_reactions(gc)
-    fx, fy = gc[GC_F0X], gc[GC_F0Y]
-    vx, vy = gear_velocity(fx, fy, gc)
-    return l1 != 0.0 or l2 != 0.0, fx, fy, vx, vy, l1, l2
+    vx, vy, l1, l2 = constrained_velocity(gc[GC_V0X], gc[GC_V0Y], gc[GC_PAIR:GC_PAIR + 10])    # :func:`held_reactions`
+    return l1 != 0.0 or l2 != 0.0, gc[GC_F0X], gc[GC_F0Y], vx, vy, l1, l2
 
 
 @njit(inline="always")
@@ -468,8 +466,10 @@ def linearise_short(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
 
 
 def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat):
-    """:func:`linearise` with another bearing model's velocity kernel (Method 1, FDM), from Python: numba caches
-    no compiled function that takes a function."""
+    """:func:`linearise` with another bearing model's velocity kernel, from Python (numba caches no compiled function
+    that takes a function): Method 1 and the FDM film by their own set-ups in the film's form
+    (:func:`linearise_short`, :func:`_linearise_fdm`); any other kernel by finite differences and
+    :func:`linearise_in_contact`'s iteration through it."""
     k, bp = bearing.kernel, bearing.params
     if k is short_kernel:                       # Method 1: its compiled set-up, G and the contact in closed form
         linearise_short(bp, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, km.pc.gear_constrained)
