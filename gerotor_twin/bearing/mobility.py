@@ -51,7 +51,8 @@ from gerotor_twin.bearing.base import KernelBearing, cap_eccentricity
 from gerotor_twin.bearing.closed_form import short_bearing_force
 from gerotor_twin.bearing.geometry import BearingGeometry
 
-__all__ = ["MobilityBearing", "mobility_velocity", "mobility_kernel", "mobility_components"]
+__all__ = ["MobilityBearing", "mobility_velocity", "mobility_kernel", "mobility_components", "mobility_linearised",
+           "mobility_linearised_kernel"]
 
 
 @njit
@@ -144,6 +145,87 @@ def mobility_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu):
     vy = s * (fy * m_zeta + fx * m_kappa)
     # + (omega/2) k x e: the frame of Eqs. (7)-(8) turns at omega_bar = omega/2 - psi_dot
     return vx - 0.5 * omega * ey, vy + 0.5 * omega * ex
+
+
+@njit
+def mobility_linearised(ex, ey, fx, fy, omega, c, length, diameter, mu):
+    r"""Journal-centre velocity by the mobility method and its derivative in the load, in closed form.
+
+    The velocity is :func:`mobility_velocity`'s, to the last bit; its load derivative
+    :math:`G = \partial\dot{\mathbf e}/\partial\mathbf F` follows from Eqs. (7)–(13) of [1]_ (Eq. (9)
+    corrected) by the chain rule through the load's magnitude and direction.  With
+    :math:`\mathbf u = \mathbf F/|\mathbf F|`, :math:`\partial\mathbf u/\partial\mathbf F = (I - \mathbf u
+    \mathbf u^T)/|\mathbf F|`:
+
+    .. math::
+
+        \frac{\partial\zeta}{\partial\mathbf F} = \frac{\mathbf e/c - \zeta\mathbf u}{|\mathbf F|},\qquad
+        \frac{\partial\kappa}{\partial\mathbf F} = \frac{\mathbf w - \kappa\mathbf u}{|\mathbf F|},\quad
+        \mathbf w = (e_y, -e_x)/c,
+
+        \dot e_x = s\,(F_x M^\zeta - F_y M^\kappa),\qquad \dot e_y = s\,(F_y M^\zeta + F_x M^\kappa)
+        \;(+\ \tfrac{\omega}{2}\mathbf k\times\mathbf e),
+
+    with :math:`dM^\zeta/d\zeta = -\tfrac52 (1-\zeta)^{3/2}/(\pi (L/D)^2)`,
+    :math:`\partial M^\kappa/\partial\zeta = 6\kappa(1-\zeta)^{1/2}/(\pi^2 (L/D)^2)`,
+    :math:`\partial M^\kappa/\partial\kappa = -4(1-\zeta)^{3/2}/(\pi^2 (L/D)^2)`.
+
+    Parameters
+    ----------
+    ex, ey, fx, fy, omega, c, length, diameter, mu
+        As :func:`mobility_velocity` [m, N, rad/s, m, m, m, Pa s].
+
+    Returns
+    -------
+    tuple of float
+        ``(de_x/dt, de_y/dt)`` [m/s] and G row-major ``(gxx, gxy, gyx, gyy)`` [m/(s·N)].
+
+    Notes
+    -----
+    At zero load the direction is undefined and the velocity is not differentiable there (a cone in F): G is
+    then taken by a forward difference of 1 N along each axis, as a finite difference would.  Where the
+    ζ-clip of :func:`mobility_components` is active (never for a finite load and ``|e| < c``) the derivative is
+    the clipped branch's, zero.
+    """
+    fmag = math.sqrt(fx * fx + fy * fy)
+    if fmag == 0.0:
+        vx, vy = mobility_velocity(ex, ey, 0.0, 0.0, omega, c, length, diameter, mu)
+        ax, ay = mobility_velocity(ex, ey, 1.0, 0.0, omega, c, length, diameter, mu)
+        bx, by = mobility_velocity(ex, ey, 0.0, 1.0, omega, c, length, diameter, mu)
+        return vx, vy, ax - vx, bx - vx, ay - vy, by - vy
+    ex, ey = cap_eccentricity(ex, ey, c)
+    ux = fx / fmag
+    uy = fy / fmag
+    zeta = (ex * ux + ey * uy) / c                       # Eq. (12)
+    kappa = (ey * ux - ex * uy) / c                      # Eq. (13)
+    m_zeta, m_kappa = mobility_components(zeta, kappa, length / diameter)
+    radius = 0.5 * diameter
+    s = c * (c / radius) ** 2 / (mu * length * diameter)
+    vx = s * (fx * m_zeta - fy * m_kappa)                # Eqs. (7)-(8)
+    vy = s * (fy * m_zeta + fx * m_kappa)
+    ld2 = (length / diameter) ** 2
+    one_m = max(1.0 - zeta, 0.0)
+    root = math.sqrt(one_m)
+    dz_dz = -2.5 * one_m * root / (math.pi * ld2)                          # dM^ζ/dζ
+    dk_dz = 6.0 * kappa * root / (math.pi * math.pi * ld2)                 # ∂M^κ/∂ζ
+    dk_dk = -4.0 * one_m * root / (math.pi * math.pi * ld2)                # ∂M^κ/∂κ
+    zx = (ex / c - zeta * ux) / fmag                     # ∂ζ/∂F
+    zy = (ey / c - zeta * uy) / fmag
+    kx = (ey / c - kappa * ux) / fmag                    # ∂κ/∂F
+    ky = (-ex / c - kappa * uy) / fmag
+    mzx, mzy = dz_dz * zx, dz_dz * zy                    # ∂M^ζ/∂F
+    mkx, mky = dk_dz * zx + dk_dk * kx, dk_dz * zy + dk_dk * ky            # ∂M^κ/∂F
+    gxx = s * (m_zeta + fx * mzx - fy * mkx)
+    gxy = s * (fx * mzy - m_kappa - fy * mky)
+    gyx = s * (fy * mzx + m_kappa + fx * mkx)
+    gyy = s * (m_zeta + fy * mzy + fx * mky)
+    return vx - 0.5 * omega * ey, vy + 0.5 * omega * ex, gxx, gxy, gyx, gyy
+
+
+@njit
+def mobility_linearised_kernel(ex, ey, fx, fy, omega, params):
+    """:func:`mobility_linearised` with ``params = (c, L, D, mu)``."""
+    return mobility_linearised(ex, ey, fx, fy, omega, params[0], params[1], params[2], params[3])
 
 
 @njit

@@ -47,7 +47,7 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
-from ..bearing.mobility import mobility_kernel
+from ..bearing.mobility import mobility_linearised_kernel
 from ..bearing.base import cap_eccentricity
 from ..bearing.reynolds_fd import fd_fields, fdm_kernel, fdm_load, velocity_from_fields
 from ..bearing.short_bearing import short_kernel, short_load
@@ -344,7 +344,8 @@ def linearise_in_contact(ex, ey, omega, km, gc):
     :func:`linearise` takes ė₀ and G at the free load F₀; where the step starts on the teeth the film carries
     F₀ + λ₁n₁ + λ₂n₂, and a reaction comparable with F₀ turns the load, where the mobility is far from linear.
     The reactions at the step's start are solved through the full mobility (:func:`contact_newton_step` from the
-    linearised ones, ė₀ and G taken afresh at each iterate's load) and the linearisation is left at the last:
+    linearised ones, ė₀ and G taken afresh at each iterate's load, one closed-form evaluation each) and the
+    linearisation is left at the last:
     the constrained velocity at F₀ is then M(e, F₀ + Nλ) itself, the reactions within the step are linear
     about it.  Off the teeth (λ = 0 at F₀) nothing changes.  Call after :func:`set_constraint`.  Returns the
     Josephy–Newton iterations (:data:`FULL_ITERATIONS` + 1: not converged; 0: off the teeth).
@@ -358,9 +359,8 @@ def linearise_in_contact(ex, ey, omega, km, gc):
     fx, fy = gc[GC_F0X], gc[GC_F0Y]
     for it in range(FULL_ITERATIONS):
         gx, gy = contact_load(fx, fy, l1, l2, gc)
-        d = load_step(gx, gy)
-        set_velocity(gc, gx, gy, mobility_kernel(ex, ey, gx, gy, omega2, bp),
-                     mobility_kernel(ex, ey, gx + d, gy, omega2, bp), mobility_kernel(ex, ey, gx, gy + d, omega2, bp), d)
+        vx, vy, gxx, gxy, gyx, gyy = mobility_linearised_kernel(ex, ey, gx, gy, omega2, bp)
+        set_linearisation(gc, gx, gy, vx, vy, gxx, gxy, gyx, gyy)
         l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2)
         if done:
             return it + 1
@@ -437,14 +437,14 @@ def film_iterate(gc, fx, fy, l1, l2, lx, ly, vx, vy, gxx, gxy, gyx, gyy):
 @njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
 def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
-    load (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1])."""
+    load (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1]; G in closed form,
+    :func:`~gerotor_twin.bearing.mobility.mobility_linearised`)."""
     pc = km.pc
     fx, fy = coupled_load_at(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
     bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
     omega2 = omega * (pc.n - 1) / pc.n
-    d = load_step(fx, fy)
-    set_velocity(gc, fx, fy, mobility_kernel(ex, ey, fx, fy, omega2, bp),
-                 mobility_kernel(ex, ey, fx + d, fy, omega2, bp), mobility_kernel(ex, ey, fx, fy + d, omega2, bp), d)
+    vx, vy, gxx, gxy, gyx, gyy = mobility_linearised_kernel(ex, ey, fx, fy, omega2, bp)
+    set_linearisation(gc, fx, fy, vx, vy, gxx, gxy, gyx, gyy)
 
 
 @njit
