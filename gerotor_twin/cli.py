@@ -1,7 +1,8 @@
 """The ``gerotor-twin`` command.
 
 Subcommands: ``geometry``, ``simulate``, ``demo``, ``bench`` here, every other one from the
-``add_parser`` of its owning module listed in ``_COMMAND_MODULES``.  User errors print one line
+``add_parser`` of its owning module listed in ``_COMMAND_MODULES``; a command line imports only the module of its
+command (``_COMMAND_OF``, :func:`command_modules`), the top-level help every one.  User errors print one line
 ``error: <field> = <value> is invalid; allowed: <range>`` and exit with 2,
 for every command: :class:`~gerotor_twin.errors.InputError`, unreadable MCAP
 input and any ``OSError`` on a path the user gave (a directory, no
@@ -19,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-from .bearing.registry import MODEL_NAMES
+from .bearing_names import MODEL_NAMES
 from .errors import InputError, one_line, one_line_warnings, path_error_line
 from .io.reader import McapReadError
 from .units import celsius_to_kelvin, kelvin_to_celsius, m3s_to_lpm, pa_abs_to_bar_gauge
@@ -384,6 +385,19 @@ def _bench_all(args) -> int:
 # ------------------------------------------------------------------- parser
 #: Every command beyond the model's own (geometry, simulate, demo, bench) comes from the
 #: ``add_parser(subparsers)`` of its owning module; this list is the one place they are registered.
+#: The commands each module of :data:`_COMMAND_MODULES` adds, so that a command line imports only its command's
+#: module (the modules import the model, numba and scipy: ≈ 1.3 s); ``bench`` takes the modules that extend it.
+#: ``test_cli.py`` checks this table against what the modules register.
+_COMMAND_OF = {"bearing-steady": "gerotor_twin.bearing.cli_commands", "bearing-benchmark": "gerotor_twin.bearing.cli_commands",
+               "paper": "gerotor_twin.paper.cli_commands", "synth-bench": "gerotor_twin.bench_emulator.cli_commands",
+               "report": "gerotor_twin.report.build", "run-bag": "gerotor_twin.offline.run_bag",
+               "calibrate": "gerotor_twin.calibration.command", "health": "gerotor_twin.offline.health_log",
+               "replay": "gerotor_twin.ros.replay", "node": "gerotor_twin.ros.cli_commands",
+               "log": "gerotor_twin.io.cli_commands", "sweep": "gerotor_twin.offline.sweep",
+               "batch": "gerotor_twin.offline.batch"}
+#: The modules that add a choice to ``bench`` (``extend_bench``).
+_BENCH_MODULES = ("gerotor_twin.ros.cli_commands", "gerotor_twin.offline.sweep_bench", "gerotor_twin.calibration.map_bench")
+
 _COMMAND_MODULES = (
     "gerotor_twin.bearing.cli_commands",          # bearing-steady, bearing-benchmark
     "gerotor_twin.paper.cli_commands",            # paper efficiency | figures | calibrate
@@ -416,7 +430,27 @@ def extend_bench(subparsers, what: str, help_text: str | None = None):
     return bench
 
 
-def build_parser() -> argparse.ArgumentParser:
+def command_modules(argv=None) -> tuple:
+    """The modules of :data:`_COMMAND_MODULES` a parser for the command line ``argv`` needs: its command's (and for
+    ``bench`` those that extend it), none for the commands defined here; every one without a command (the top-level
+    help) or with one not known here (argparse then lists the choices)."""
+    first = next((a for a in argv or () if not a.startswith("-")), None)
+    if argv is None or first is None:
+        return _COMMAND_MODULES
+    if first == "bench":
+        return _BENCH_MODULES
+    if first in _COMMAND_OF:
+        return (_COMMAND_OF[first],)
+    return () if first in _BUILT_IN else _COMMAND_MODULES
+
+
+#: The commands :func:`build_parser` defines itself.
+_BUILT_IN = ("geometry", "simulate", "demo", "bench")
+
+
+def build_parser(argv=None) -> argparse.ArgumentParser:
+    """The command-line parser; with ``argv``, only with the commands that command line needs
+    (:func:`command_modules`)."""
     p = argparse.ArgumentParser(prog="gerotor-twin", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -492,14 +526,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="all: also time the first compile on an empty numba cache (minutes)")
     b.set_defaults(func=cmd_bench)
 
-    for name in _COMMAND_MODULES:
+    for name in command_modules(argv):
         importlib.import_module(name).add_parser(sub)
     return p
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(argv).parse_args(argv)
     try:
         with one_line_warnings():
             return int(args.func(args) or 0)

@@ -181,7 +181,7 @@ def test_cli_output_into_a_closed_pipe_is_quiet(monkeypatch, capsys):
     parser = cli.build_parser()
     args = parser.parse_args(["geometry"])
     args.func = gone
-    monkeypatch.setattr(cli, "build_parser", lambda: type("P", (), {"parse_args": lambda self, argv: args})())
+    monkeypatch.setattr(cli, "build_parser", lambda argv=None: type("P", (), {"parse_args": lambda self, argv: args})())
     assert cli.main(["geometry"]) == 141         # (capsys's stdout has no file descriptor to redirect)
     assert capsys.readouterr().err == ""
 

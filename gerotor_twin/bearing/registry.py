@@ -1,4 +1,4 @@
-"""The outer-gear models by name: the one list of names and the factory.
+"""The outer-gear models by name: the factory (the one list of names is :mod:`gerotor_twin.bearing_names`'s).
 
 Kept out of :mod:`gerotor_twin.bearing.base` (the interface the models import),
 so that no module imports its own subclasses.
@@ -9,12 +9,10 @@ from typing import Any
 
 from gerotor_twin.bearing.base import BearingModel
 from gerotor_twin.bearing.geometry import BearingGeometry
+from gerotor_twin.bearing_names import MODEL_NAMES
 from gerotor_twin.errors import InputError
 
 __all__ = ["MODEL_NAMES", "make_bearing"]
-
-#: The outer-gear models, by name: fixed centre, mobility method, short bearing (Method 1), FDM.
-MODEL_NAMES = ("fixed", "mobility", "short", "fdm")
 
 
 def make_bearing(name: str, geometry: BearingGeometry, **options: Any) -> BearingModel:
