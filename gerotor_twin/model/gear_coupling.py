@@ -57,6 +57,7 @@ from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility, reactions
 
 __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity", "gear_squeeze", "linearise",
+           "linearise_mobility",
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
            "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact", "short_in_contact",
            "fdm_in_contact", "film_start", "film_iterate", "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL"]
@@ -445,6 +446,19 @@ def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     omega2 = omega * (pc.n - 1) / pc.n
     vx, vy, gxx, gxy, gyx, gyy = mobility_linearised_kernel(ex, ey, fx, fy, omega2, bp)
     set_linearisation(gc, fx, fy, vx, vy, gxx, gxy, gyx, gyy)
+
+
+@njit(forceinline=True)     # per output step, the stepper's two sites: typed and lowered once, inlined by LLVM
+def linearise_mobility(ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat, constrained):
+    """The mobility gear's set-up of the output step of h [s] from θ [rad]: :func:`linearise`, and with the tooth
+    constraint (``constrained``, h > 0) :func:`set_constraint` and :func:`linearise_in_contact`.  Returns True
+    when the constraint was set (``cmat`` then holds the gap expansions at the step's end)."""
+    linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows)
+    if constrained and h > 0.0:
+        set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
+        linearise_in_contact(ex, ey, omega, km, gc)
+        return True
+    return False
 
 
 @njit

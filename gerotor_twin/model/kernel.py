@@ -64,8 +64,7 @@ from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
 from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
-                            close_pending, gear_move, linearise, linearise_in_contact, linearise_short, linearise_with,
-                            set_constraint)
+                            close_pending, gear_move, linearise_mobility, linearise_short, linearise_with)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY)
@@ -436,10 +435,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         ws.gear[GC_ON] = 0.0
     elif move == MOVE_MOBILITY:
         to_pressures(y, km, ws.pres)
-        linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
-        if constraint is not None and h > 0.0:
-            set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear, ws.cmat)
-            linearise_in_contact(ex, ey, op.omega, km, ws.gear)
+        if linearise_mobility(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows, ws.cmat,
+                              constraint is not None):
             ws.ctrl[CT_CMAT_END] = 1.0             # and the step's end: pressure_step's tip gaps read them
     ws.ctrl[CT_PENDING] = 0.0
     _first_stage(y, theta, km, op, ws, integrals, h)
@@ -483,10 +480,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
         if ex != ex0 or ey != ey0:
             counters[C_GEAR_CONTACT] += 1
         if coupled and move == MOVE_MOBILITY:
-            linearise(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows)
-            if constraint is not None and h > 0.0:
-                set_constraint(ex, ey, theta + op.omega * h, h, km, ws.gear, ws.cmat)
-                linearise_in_contact(ex, ey, op.omega, km, ws.gear)
+            if linearise_mobility(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows, ws.cmat,
+                                  constraint is not None):
                 ws.ctrl[CT_CMAT_END] = 1.0
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
