@@ -1,6 +1,6 @@
 """Build the numba cache at install time: ``python -m gerotor_twin.precompile``.
 
-The first model start compiles the stepper (45 specialisations, ≈ 32–35 s on the dev machine's two cores);
+The first model start compiles the stepper (46 specialisations, ≈ 30–36 s on the dev machine's two cores);
 ``make setup`` runs this module once so that no user waits for it.  It runs
 what a first model start runs — a few output steps of the default pump with
 each gear model given (default: ``mobility``, the twin's, and ``fixed``, which adds
