@@ -383,11 +383,9 @@ def _bench_all(args) -> int:
 
 
 # ------------------------------------------------------------------- parser
-#: Every command beyond the model's own (geometry, simulate, demo, bench) comes from the
-#: ``add_parser(subparsers)`` of its owning module; this list is the one place they are registered.
 #: The commands each module of :data:`_COMMAND_MODULES` adds, so that a command line imports only its command's
 #: module (the modules import the model, numba and scipy: ≈ 1.3 s); ``bench`` takes the modules that extend it.
-#: ``test_cli.py`` checks this table against what the modules register.
+#: ``test/test_cli_commands.py`` checks this table against what the modules register.
 _COMMAND_OF = {"bearing-steady": "gerotor_twin.bearing.cli_commands", "bearing-benchmark": "gerotor_twin.bearing.cli_commands",
                "paper": "gerotor_twin.paper.cli_commands", "synth-bench": "gerotor_twin.bench_emulator.cli_commands",
                "report": "gerotor_twin.report.build", "run-bag": "gerotor_twin.offline.run_bag",
@@ -398,6 +396,8 @@ _COMMAND_OF = {"bearing-steady": "gerotor_twin.bearing.cli_commands", "bearing-b
 #: The modules that add a choice to ``bench`` (``extend_bench``).
 _BENCH_MODULES = ("gerotor_twin.ros.cli_commands", "gerotor_twin.offline.sweep_bench", "gerotor_twin.calibration.map_bench")
 
+#: Every command beyond the model's own (geometry, simulate, demo, bench) comes from the
+#: ``add_parser(subparsers)`` of its owning module, registered here in the order of the help.
 _COMMAND_MODULES = (
     "gerotor_twin.bearing.cli_commands",          # bearing-steady, bearing-benchmark
     "gerotor_twin.paper.cli_commands",            # paper efficiency | figures | calibrate
@@ -430,6 +430,10 @@ def extend_bench(subparsers, what: str, help_text: str | None = None):
     return bench
 
 
+#: The commands :func:`build_parser` defines itself.
+_BUILT_IN = ("geometry", "simulate", "demo", "bench")
+
+
 def command_modules(argv=None) -> tuple:
     """The modules of :data:`_COMMAND_MODULES` a parser for the command line ``argv`` needs: its command's (and for
     ``bench`` those that extend it), none for the commands defined here; every one without a command (the top-level
@@ -442,10 +446,6 @@ def command_modules(argv=None) -> tuple:
     if first in _COMMAND_OF:
         return (_COMMAND_OF[first],)
     return () if first in _BUILT_IN else _COMMAND_MODULES
-
-
-#: The commands :func:`build_parser` defines itself.
-_BUILT_IN = ("geometry", "simulate", "demo", "bench")
 
 
 def build_parser(argv=None) -> argparse.ArgumentParser:
