@@ -97,6 +97,25 @@ def mobility_components(zeta, kappa, ld):
     return m_zeta, m_kappa
 
 
+@njit(inline="always")
+def _load_frame(ex, ey, fx, fy, c, length, diameter, mu):
+    """The state in the load's frame, Eqs. (7)-(13) of [1]_: e capped (:func:`cap_eccentricity`) [m], |F| [N], the
+    load's direction (cos ψ, sin ψ; (1, 0) at zero load), ζ, κ [-] and the scale s = c (c/R)² / (μ L D) [m/(s·N)]."""
+    ex, ey = cap_eccentricity(ex, ey, c)
+    fmag = math.sqrt(fx * fx + fy * fy)
+    if fmag > 0.0:
+        cpsi = fx / fmag  # R(psi): rotation to the load direction
+        spsi = fy / fmag
+    else:
+        cpsi = 1.0
+        spsi = 0.0
+    zeta = (ex * cpsi + ey * spsi) / c  # Eq. (12), in the load frame
+    kappa = (ey * cpsi - ex * spsi) / c  # Eq. (13)
+    radius = 0.5 * diameter
+    s = c * (c / radius) ** 2 / (mu * length * diameter)
+    return ex, ey, fmag, cpsi, spsi, zeta, kappa, s
+
+
 @njit
 def mobility_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu):
     """Journal-centre velocity by the short-bearing mobility method.
@@ -127,20 +146,9 @@ def mobility_velocity(ex, ey, fx, fy, omega, c, length, diameter, mu):
     tuple of float
         ``(de_x/dt, de_y/dt)`` [m/s].
     """
-    ex, ey = cap_eccentricity(ex, ey, c)
-    fmag = math.sqrt(fx * fx + fy * fy)
-    if fmag > 0.0:
-        cpsi = fx / fmag  # R(psi): rotation to the load direction
-        spsi = fy / fmag
-    else:
-        cpsi = 1.0
-        spsi = 0.0
-    zeta = (ex * cpsi + ey * spsi) / c  # Eq. (12), in the load frame
-    kappa = (ey * cpsi - ex * spsi) / c  # Eq. (13)
+    ex, ey, _fmag, _cpsi, _spsi, zeta, kappa, s = _load_frame(ex, ey, fx, fy, c, length, diameter, mu)
     m_zeta, m_kappa = mobility_components(zeta, kappa, length / diameter)
-    radius = 0.5 * diameter
     # c K R(psi) M with K = |F| (c/R)^2 / (mu L D), Eqs. (7)-(8); |F| R(psi) = [[fx, -fy], [fy, fx]]
-    s = c * (c / radius) ** 2 / (mu * length * diameter)
     vx = s * (fx * m_zeta - fy * m_kappa)
     vy = s * (fy * m_zeta + fx * m_kappa)
     # + (omega/2) k x e: the frame of Eqs. (7)-(8) turns at omega_bar = omega/2 - psi_dot
@@ -187,20 +195,13 @@ def mobility_linearised(ex, ey, fx, fy, omega, c, length, diameter, mu):
     ζ-clip of :func:`mobility_components` is active (never for a finite load and ``|e| < c``) the derivative is
     the clipped branch's, zero.
     """
-    fmag = math.sqrt(fx * fx + fy * fy)
-    if fmag == 0.0:
+    if fx == 0.0 and fy == 0.0:
         vx, vy = mobility_velocity(ex, ey, 0.0, 0.0, omega, c, length, diameter, mu)
         ax, ay = mobility_velocity(ex, ey, 1.0, 0.0, omega, c, length, diameter, mu)
         bx, by = mobility_velocity(ex, ey, 0.0, 1.0, omega, c, length, diameter, mu)
         return vx, vy, ax - vx, bx - vx, ay - vy, by - vy
-    ex, ey = cap_eccentricity(ex, ey, c)
-    ux = fx / fmag
-    uy = fy / fmag
-    zeta = (ex * ux + ey * uy) / c                       # Eq. (12)
-    kappa = (ey * ux - ex * uy) / c                      # Eq. (13)
+    ex, ey, fmag, ux, uy, zeta, kappa, s = _load_frame(ex, ey, fx, fy, c, length, diameter, mu)
     m_zeta, m_kappa = mobility_components(zeta, kappa, length / diameter)
-    radius = 0.5 * diameter
-    s = c * (c / radius) ** 2 / (mu * length * diameter)
     vx = s * (fx * m_zeta - fy * m_kappa)                # Eqs. (7)-(8)
     vy = s * (fy * m_zeta + fx * m_kappa)
     ld2 = (length / diameter) ** 2

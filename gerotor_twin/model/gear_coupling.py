@@ -435,7 +435,7 @@ def film_iterate(gc, fx, fy, l1, l2, lx, ly, vx, vy, gxx, gxy, gyx, gyy):
     return vx, vy, m1, m2, abs(m1 - l1) + abs(m2 - l2) <= FULL_RTOL * (math.hypot(fx, fy) + m1 + m2)
 
 
-@njit(forceinline=True)     # per output step, two sites: compiled once, inlined by LLVM
+@njit(forceinline=True)     # per output step, inside linearise_mobility: inlined by LLVM
 def linearise(ex, ey, theta, omega, h, kc, km, pres, gc, rows):
     """Set up the coupling of the next output step of h [s] with the mobility method (compiled in): the coupled
     load (:func:`coupled_load_at`), ė₀ and G (Eqs. (7)–(13) of [1]; G in closed form,
