@@ -120,7 +120,8 @@ def test_advance_depends_on_the_state_alone(cfg):
     between (a start-up or health check on the live model) continues exactly as one that did not.  The mobility
     model with displaced volumes: the squeeze velocity of the gear's last move is part of the state
     (``PumpState.squeeze_velocity``); kept in the workspace instead, the other state's run changed the next
-    step's chamber pressures by up to 0.75 bar."""
+    step's chamber pressures by up to 0.75 bar.  So is the correction the Josephy–Newton on the teeth starts from
+    (``PumpState.contact_correction``; the gear rides on the teeth here)."""
     def inputs(rpm, bar):
         return Inputs(rpm * math.pi / 30, cfg.boundary.suction_pressure_pa,
                       cfg.fluid.atmospheric_pa + bar * 1e5)
@@ -132,7 +133,7 @@ def test_advance_depends_on_the_state_alone(cfg):
     s1, _ = shared.advance(shared.initial_state(ia), 0.01, ia)
     shared.advance(shared.initial_state(ib), 0.01, ib)                 # another state on the same model
     s2, out_shared = shared.advance(s1, 0.01, ia)
-    assert np.any(a1.squeeze_velocity != 0.0)
+    assert np.any(a1.squeeze_velocity != 0.0) and np.any(a1.contact_correction != 0.0)
     assert np.array_equal(out_alone.chamber_pressures, out_shared.chamber_pressures)
     assert np.array_equal(a2.eccentricity, s2.eccentricity)
     assert np.array_equal(a2.squeeze_velocity, s2.squeeze_velocity)

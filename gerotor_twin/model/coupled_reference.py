@@ -42,7 +42,8 @@ from ..bearing.mobility import mobility_kernel
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 from .contact import contact, gap_coefficients, gap_value
 from .flows import rhs
-from .gear_coupling import GC_CON, GC_ON, GC_PAIR, N_GEAR, gear_velocity, linearise_in_contact, load_step, set_velocity
+from .gear_coupling import (FULL_RTOL, GC_CON, GC_ON, GC_PAIR, N_GEAR, gear_velocity, linearise_in_contact, load_step,
+                            set_velocity)
 from .kernel import to_pressures
 from .loads import outer_gear_load
 from .params import FL_DELIVERY, operating
@@ -125,7 +126,7 @@ def coupled_rhs(t, z, theta0, tau, km, op, ws, out, full=True):
         set_velocity(gc, fx, fy, (vx, vy), (v1x, v1y), (v2x, v2y), d)
         gc[GC_PAIR:GC_PAIR + 10] = c
         gc[GC_CON] = 1.0
-        linearise_in_contact(ex, ey, op.omega, km, gc)
+        linearise_in_contact(ex, ey, op.omega, km, gc, FULL_RTOL)
         vx, vy = gear_velocity(fx, fy, gc)
     else:
         vx, vy, _l1, _l2 = constrained_velocity(vx, vy, c)

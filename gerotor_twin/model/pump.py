@@ -30,6 +30,7 @@ from ..compile_events import announce_compilation
 from . import kernel as K
 from .records import Inputs, Outputs, PumpState, check_inputs
 from .contact import contact
+from .gear_coupling import GC_CORR1, GC_CORR_BEFORE
 from .params import FL_DELIVERY, FL_MASS_IN, FL_MASS_OUT, at_load, at_temperature, kernel_model, operating, workspace
 
 __all__ = ["Inputs", "PumpState", "Outputs", "PumpModel", "SolverFailure", "BEARING_MODELS", "TEMPERATURE_STEP_K",
@@ -261,6 +262,7 @@ class PumpModel:
         ws = self._ws
         ws.ctrl[K.CT_SUBSTEP] = state.substep
         ws.ctrl[K.CT_RANGE] = state.pressure_range
+        ws.gear[GC_CORR1:GC_CORR1 + 4] = state.contact_correction     # as the set-up at the state found it
         ws.ctrl[K.CT_BOUND] = self.config.numerics.max_substep_attempts
         if self.kernel.tab.volumes_follow_gear:        # the volumes where the state's gear is, squeezed as it moved
             ws.disp[0], ws.disp[1] = e[0], e[1]
@@ -292,7 +294,9 @@ class PumpModel:
                         volumes=vols, swept_angle=swept,
                         substep=float(ws.ctrl[K.CT_SUBSTEP]),
                         pressure_range=float(ws.ctrl[K.CT_RANGE]),
-                        squeeze_velocity=ws.disp[2:4].copy() if n else state.squeeze_velocity.copy())
+                        squeeze_velocity=ws.disp[2:4].copy() if n else state.squeeze_velocity.copy(),
+                        contact_correction=ws.gear[GC_CORR_BEFORE:GC_CORR_BEFORE + 4].copy() if n
+                        else state.contact_correction.copy())
         return new, self._outputs(rec, rec_p, rec_peak, rec_g, inputs, vols - state.volumes, dt)
 
     def _constraint(self):

@@ -61,6 +61,11 @@ class PumpState:
     #: (2,) velocity of the outer gear's last move that the chamber volumes have taken up, whose squeeze the next
     #: output step applies (:func:`.volumes.move_volumes`; zero with nominal volumes) [m/s]
     squeeze_velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    #: (4,) the full film law's correction λ* − λ^lin [N] of the teeth's two reactions linearised at the free load and
+    #: the indices of the two lobes they act on, as the set-up of the step from this state found them (the previous
+    #: step's: its Josephy–Newton's start, :func:`.gear_coupling.warm_reactions`), so a call from this state sets that
+    #: step up as the call that ended here did; zeros where none
+    contact_correction: np.ndarray = field(default_factory=lambda: np.zeros(4))
 
     @property
     def counts(self) -> dict:
