@@ -183,13 +183,15 @@ def gear_squeeze(theta, n, p_atm, p, beta, acc, gc, rows, jac, want_jac):
         gxx, gxy, gyx, gyy = velocity_jacobian(gc)
         dvx = gxx * dfx + gxy * dfy
         dvy = gyx * dfx + gyy * dfy
+        held = gxx == 0.0 and gxy == 0.0 and gyx == 0.0 and gyy == 0.0    # both lobes hold: ė does not follow p
         for j in range(n):
             a = rows[j, ROW_NOW_F]
             b = rows[j, ROW_NOW_F + 1]
-            ax = gxx * a + gyx * b                      # Gᵀ f_j
-            ay = gxy * a + gyy * b
-            for k in range(n):
-                jac[j, k] -= (ax * rows[k, ROW_NOW_G] + ay * rows[k, ROW_NOW_G + 1]) * beta[k]
+            if not held:
+                ax = gxx * a + gyx * b                  # Gᵀ f_j
+                ay = gxy * a + gyy * b
+                for k in range(n):
+                    jac[j, k] -= (ax * rows[k, ROW_NOW_G] + ay * rows[k, ROW_NOW_G + 1]) * beta[k]
             jac[j, n + 1] -= rows[j, ROW_DF] * vx + rows[j, ROW_DF + 1] * vy + a * dvx + b * dvy
 
 
