@@ -41,6 +41,8 @@ References
 .. [2] N.H. Josephy, "Newton's method for generalized equations", Technical Summary Report 1965, Mathematics
    Research Center, University of Wisconsin, 1979; F. Facchinei, J.-S. Pang, *Finite-Dimensional Variational
    Inequalities and Complementarity Problems*, Springer 2003, sec. 7.3.
+.. [3] E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996, sec. IV.8
+   (the simplified Newton iteration of implicit Runge–Kutta methods: its stopping criterion).
 """
 from __future__ import annotations
 
@@ -61,7 +63,7 @@ __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity"
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
            "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact", "short_in_contact",
            "fdm_in_contact", "film_start", "film_iterate", "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL",
-           "CONTACT_RTOL_PER_TOLERANCE", "contact_rtol", "warm_reactions"]
+           "CONTACT_RTOL_PER_TOLERANCE", "contact_rtol", "warm_reactions", "newton_converged"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -346,15 +348,16 @@ def contact_load(fx, fy, l1, l2, gc):
 
 
 @njit(inline="always")
-def contact_newton_step(gc, fx, fy, l1, l2, rtol):
-    r"""One Josephy–Newton step [2] of the reactions through the full film law; returns (λ₁, λ₂, converged).
+def contact_newton_step(gc, fx, fy, l1, l2):
+    r"""One Josephy–Newton step [2] of the reactions through the full film law; returns (λ₁, λ₂, δ): the new
+    reactions [N] and their change as a fraction of |F₀| + |λ| [-] (:func:`newton_converged`).
 
     The film carries the load and the reactions together, ė = M(e, F₀ + λ₁n₁ + λ₂n₂), with each gap's rate
     w_k = n_k·ė + r_k ≥ 0, λ_k ≥ 0, w_k λ_k = 0: a nonlinear complementarity problem.  ``gc`` holds ė and G at
     the iterate's load :func:`contact_load` (``fx, fy``, ``l1, l2``; :func:`set_velocity` there) and the contacts of
     :func:`set_constraint`; the step solves the linear complementarity problem of
     :func:`.tooth_constraint.reactions` with A = NᵀG N and s = w(λ) − Aλ, and leaves the constraint on with G n at
-    this iterate.  Converged when λ moves by less than ``rtol`` of |F₀| + |λ| (:func:`contact_rtol`).
+    this iterate.
     """
     c = gc[GC_PAIR:GC_PAIR + 10]
     contact_pair(gc[GC_GXX], gc[GC_GXY], gc[GC_GYX], gc[GC_GYY], c[0], c[1], c[2], c[3], c[8], c[9], c)
@@ -364,7 +367,27 @@ def contact_newton_step(gc, fx, fy, l1, l2, rtol):
     s1 = c[0] * gc[GC_V0X] + c[1] * gc[GC_V0Y] + c[8] - (a11 * l1 + a12 * l2)
     s2 = c[2] * gc[GC_V0X] + c[3] * gc[GC_V0Y] + c[9] - (a21 * l1 + a22 * l2)
     m1, m2 = reactions(s1, s2, a11, a12, a21, a22)
-    return m1, m2, abs(m1 - l1) + abs(m2 - l2) <= rtol * (math.hypot(fx, fy) + m1 + m2)
+    return m1, m2, (abs(m1 - l1) + abs(m2 - l2)) / (math.hypot(fx, fy) + m1 + m2)
+
+
+@njit(inline="always")
+def newton_converged(delta, delta_prev, rtol):
+    r"""True when the Josephy–Newton's iterate is within ``rtol`` [-] of the solution, from its last change δ and the
+    one before, δ_prev (fractions of |F₀| + |λ|; δ_prev = ∞ at the first iterate): δ ≤ rtol, or the error of the new
+    iterate estimated from the observed contraction Θ = δ/δ_prev [3],
+
+    .. math:: \frac{\Theta}{1 - \Theta}\,\delta \le \mathrm{rtol},\qquad \Theta < 1
+
+    (the Newton iteration's stopping criterion of the implicit Runge–Kutta codes, [3] eqs. (8.10)–(8.11)).  Near
+    the solution Newton's contraction is quadratic, Θ ∝ δ, so the estimate stops one iterate before δ itself
+    falls below ``rtol``.
+    """
+    if delta <= rtol:
+        return True
+    if not delta_prev < math.inf:                       # the first iterate: no contraction observed yet
+        return False
+    theta = delta / delta_prev
+    return theta < 1.0 and theta / (1.0 - theta) * delta <= rtol
 
 
 @njit(inline="always")
@@ -419,12 +442,14 @@ def linearise_in_contact(ex, ey, omega, km, gc, rtol):
     bp = (pc.housing_clearance, pc.width, 2.0 * pc.journal_radius, pc.viscosity)
     omega2 = omega * (pc.n - 1) / pc.n
     fx, fy = gc[GC_F0X], gc[GC_F0Y]
+    delta = math.inf
     for it in range(FULL_ITERATIONS):
         gx, gy = contact_load(fx, fy, l1, l2, gc)
         vx, vy, gxx, gxy, gyx, gyy = mobility_linearised_kernel(ex, ey, gx, gy, omega2, bp)
         set_linearisation(gc, gx, gy, vx, vy, gxx, gxy, gyx, gyy)
-        l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2, rtol)
-        if done:
+        delta_prev = delta
+        l1, l2, delta = contact_newton_step(gc, fx, fy, l1, l2)
+        if newton_converged(delta, delta_prev, rtol):
             gc[GC_CORR1], gc[GC_CORR2] = l1 - lin1, l2 - lin2
             gc[GC_CORR_LOBE1], gc[GC_CORR_LOBE2] = gc[GC_LOBE1], gc[GC_LOBE2]
             return it + 1
@@ -567,8 +592,8 @@ def linearise_with(bearing, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cma
             d = load_step(gx, gy)
             set_velocity(gc, gx, gy, k(ex, ey, gx, gy, omega2, bp), k(ex, ey, gx + d, gy, omega2, bp),
                          k(ex, ey, gx, gy + d, omega2, bp), d)
-            l1, l2, done = contact_newton_step(gc, fx, fy, l1, l2, contact_rtol(km.pc))
-            if done:
+            l1, l2, delta = contact_newton_step(gc, fx, fy, l1, l2)
+            if delta <= contact_rtol(km.pc):
                 break
 
 
