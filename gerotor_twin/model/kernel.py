@@ -67,7 +67,7 @@ from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX
                             close_pending, gear_move, linearise_mobility, linearise_short, linearise_with)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
-                     FL_DELIVERY)
+                     FL_DELIVERY, FRESH_IN_F0, FRESH_IN_F1, FRESH_NONE)
 from .step_control import (GAMMA, defect_error, defect_threshold, embedded_error, error_norm, error_weights,
                            port_filtered, step_factor, update_range)
 from .tooth_constraint import pull_back_along
@@ -182,9 +182,19 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     The flows here are those at the end of the last accepted sub-step: its trapezoid
     (``ws.flows_prev`` at its start, these at its end) is added to ``integrals`` now,
     so ∫ flow dt uses the flows of the accepted states, at no extra RHS; and its
-    chamber peaks are tracked (:func:`_track_peak`).
+    chamber peaks are tracked (:func:`_track_peak`).  Where the defect check evaluated the RHS and Jacobian at this
+    state already (``ws.ctrl[CT_FRESH]`` = ``FRESH_IN_F1``: a sub-step it accepted inside the output step, so the
+    gaps, the gear's coupling and the displaced volumes are those it saw) they are taken from ``ws.f1`` and
+    ``ws.jac_end``.
     """
-    rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(True))   # bool(): not a literal (flows.rhs, Notes)
+    if ws.ctrl[CT_FRESH] == FRESH_IN_F1:
+        n1 = ws.f0.shape[0]
+        for i in range(n1):
+            ws.f0[i] = ws.f1[i]
+            for k in range(n1 + 1):                 # ∂f/∂y and ∂f/∂t: what flows.rhs writes
+                ws.jac[i, k] = ws.jac_end[i, k]
+    else:
+        rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(True))   # bool(): not a literal (flows.rhs, Notes)
     if ws.gear[GC_ON] != 0.0:
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
@@ -198,7 +208,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
             integrals[i] += 0.5 * h * (ws.flows_prev[i] + ws.flows[i])
         ws.flows_prev[i] = ws.flows[i]
     ws.ctrl[CT_PENDING] = 0.0
-    ws.ctrl[CT_FRESH] = 1.0
+    ws.ctrl[CT_FRESH] = FRESH_IN_F0
 
 
 @njit(inline="always")
@@ -242,10 +252,11 @@ def ros2_step(y, th2, h, km, op, ws):
 def _defect_norm(th2, h, km, op, ws):    # right-hand side in the stepper cost 1.5–3.5 s of the first compile
     """Error norm of the sub-step of h [s] that ended at (``ws.ynew``, θ₂ = ``th2``) by its defect there
     (:func:`.step_control.defect_error`): the right-hand side and Jacobian at the new state into ``ws.f1`` and
-    ``ws.jac``, so the first stage that follows is evaluated afresh (at the new state or, rejected, at the old)."""
-    rhs(ws.ynew, th2, ws.gaps1, km, op, ws, ws.f1, ws.jac, bool(True))
-    defect_error(h, ws.f1, ws.k1, ws.k2, ws.jac, ws.err)
-    ws.ctrl[CT_FRESH] = 0.0
+    ``ws.jac_end``, so that a rejected sub-step is tried again from the first stage as it was (``ws.f0``,
+    ``ws.jac``), and one accepted inside the output step hands them to the next first stage (:func:`pressure_step`,
+    :func:`_first_stage`)."""
+    rhs(ws.ynew, th2, ws.gaps1, km, op, ws, ws.f1, ws.jac_end, bool(True))
+    defect_error(h, ws.f1, ws.k1, ws.k2, ws.jac_end, ws.err)
     return error_norm(ws.err, ws.wt)
 
 
@@ -281,7 +292,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         if attempts > ws.ctrl[CT_BOUND]:
             return STEP_WORK_BOUND
         h = min(h, big_h - done)
-        if ws.ctrl[CT_FRESH] == 0.0:                    # first stage at (y, θ)
+        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # first stage at (y, θ)
             _first_stage(y, th, km, op, ws, integrals, big_h)
         h = min(max(h, h_min), big_h - done)
         last = done + h >= big_h * (1.0 - 1e-12)
@@ -291,6 +302,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
         check = port_filtered(ws, h)
         en = ros2_step(y, th2, h, km, op, ws)
+        checked = False
         if en <= 1.0 or h <= h_min:
             finite = True
             for i in range(n1):
@@ -300,6 +312,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
                 return STEP_NONFINITE
             if check and h > h_min:
                 en = _defect_norm(th2, h, km, op, ws)  # the embedded estimate is blind there (step_control)
+                checked = True
         if en <= 1.0 or h <= h_min:
             if en > 1.0:
                 counters[C_FAILED] += 1               # accepted at the smallest sub-step above the tolerance
@@ -309,12 +322,14 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             ws.gear[GC_PEND] = h                  # and its ∫ė dt
             for k in range(pc.n):
                 ws.gaps0[k] = ws.gaps1[k]
-            ws.ctrl[CT_FRESH] = 0.0
+            # the defect check's RHS at this state serves the next first stage, unless the output step ends here
+            # (the gear's move and the overlap check change the gaps and the volumes before it)
+            ws.ctrl[CT_FRESH] = FRESH_IN_F1 if checked and not last else FRESH_NONE
             done += h
             th = th2
             counters[C_SUBSTEPS] += 1
         else:
-            counters[C_REJECTED] += 1      # stage 1 stays valid: same (y, θ); after a defect check it is recomputed
+            counters[C_REJECTED] += 1      # stage 1 stays valid: same (y, θ), the defect check's in ws.jac_end
         h = max(h * step_factor(en), h_min)
     ws.ctrl[CT_SUBSTEP] = h
     return STEP_DONE
@@ -439,6 +454,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
                               constraint is not None):
             ws.ctrl[CT_CMAT_END] = 1.0             # and the step's end: pressure_step's tip gaps read them
     ws.ctrl[CT_PENDING] = 0.0
+    ws.ctrl[CT_FRESH] = FRESH_NONE                 # a call starts with its own first stage
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
     fade = math.exp(-abs(op.omega) * h / (2.0 * math.pi))     # of the error scale's range, per output step
@@ -521,7 +537,7 @@ def integrate_external(bearing, y, e, theta, t, n_steps, h, km, op, ws, rec, rec
                                    counters)
         ex, ey, gam, kc = contact(km.tab, km.pc.n, km.pc.tip_clearance, theta, ex, ey, ws.gaps0, ws.cmat)
         move_volumes(km.tab, ws.disp, ex, ey, h)
-        ws.ctrl[CT_FRESH] = 0.0              # the gaps moved: the next first stage is recomputed
+        ws.ctrl[CT_FRESH] = FRESH_NONE       # the gaps moved: the next first stage is recomputed
         e[0], e[1] = ex, ey
         rec[i, R_EX], rec[i, R_EY], rec[i, R_FX], rec[i, R_FY] = ex, ey, fx, fy
         rec[i, R_GAMMA], rec[i, R_KC] = gam, kc

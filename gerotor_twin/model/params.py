@@ -35,7 +35,7 @@ from ..hydraulics.state_equation import StateEquation, port_states, state_equati
 __all__ = ["KernelTables", "PumpConstants", "KernelModel", "Operating", "Workspace", "kernel_model",
            "operating", "workspace", "at_temperature", "at_load", "lateral_gap", "N_FLOWS", "FL_DELIVERY", "FL_SUCTION", "FL_SUCTION_DELIVERY",
            "FL_DRAIN", "FL_RESTRICTION", "FL_MASS_IN", "FL_MASS_OUT", "ERROR_LOG_DENSITY", "ERROR_PRESSURE",
-           "CT_SUBSTEP", "CT_FRESH", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND",
+           "CT_SUBSTEP", "CT_FRESH", "FRESH_NONE", "FRESH_IN_F0", "FRESH_IN_F1", "CT_PENDING", "CT_CLOSING", "CT_RANGE", "CT_STATUS", "CT_BOUND",
            "CT_DEFECT_H", "CT_CMAT_END", "N_CTRL"]
 
 #: Indices of the flow vector the right-hand side fills (and of the integrals ∫ flow dt):
@@ -50,7 +50,8 @@ N_FLOWS = 7
 #: relative to the error scale (``step_control.error_scale``).
 ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 
-#: ``Workspace.ctrl`` entries: the proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ); the
+#: ``Workspace.ctrl`` entries: the proposed sub-step [s]; 1 if f0/jac hold the RHS at the current (y, θ), 2 if
+#: f1/jac_end hold it (the defect check's at the sub-step it accepted: :data:`FRESH_IN_F1`), 0 if neither; the
 #: pending sub-step [s]; how many ports close within the horizon; the chamber pressures' recent range [Pa]; why
 #: the last output step was abandoned; the sub-step attempts an output step may take; the sub-step [s] above which
 #: the defect check runs (``step_control.defect_threshold``); 1 if ``Workspace.cmat`` holds the gap expansions at
@@ -60,6 +61,9 @@ ERROR_LOG_DENSITY, ERROR_PRESSURE = 0, 1
 CT_SUBSTEP, CT_FRESH, CT_PENDING, CT_CLOSING, CT_RANGE, CT_STATUS, CT_BOUND, CT_DEFECT_H, CT_CMAT_END, \
     CT_GEO_OK, CT_GEO_THETA, CT_GEO_TABLE = range(12)
 N_CTRL = 12
+#: ``Workspace.ctrl[CT_FRESH]``: f0/jac hold the right-hand side and Jacobian at the current state (1), f1/jac_end
+#: hold them (2: the defect check evaluated them at the sub-step it accepted), or neither (0)
+FRESH_NONE, FRESH_IN_F0, FRESH_IN_F1 = 0.0, 1.0, 2.0
 
 
 #: columns of ``Workspace.jac`` after ∂f/∂y: ∂f/∂t and the closing ports' shares (:mod:`.flows`, ``J_*``)
@@ -146,6 +150,7 @@ class Workspace(NamedTuple):
     err: np.ndarray
     wt: np.ndarray          #: (N+1,) error weights [1/-]
     jac: np.ndarray         #: (N+1, N+7) ∂f/∂y [1/s], then ∂f/∂t [1/s²] and the closing ports' shares (flows.J_*)
+    jac_end: np.ndarray     #: (N+1, N+7) ... at the end of a sub-step the defect check evaluates (kernel._defect_norm)
     lu: np.ndarray          #: (N+1, N+1) LU of I − γ h J
     piv: np.ndarray         #: (N+1,) pivots
     gaps0: np.ndarray       #: (N,) tooth-tip gaps at the sub-step start [m]
@@ -287,7 +292,8 @@ def workspace(n: int) -> Workspace:
         return np.zeros(k)
 
     return Workspace(p=v(), beta=v(), rho=v(), acc=v(), geo=np.zeros((n, 16)), f0=v(), f1=v(), k1=v(), k2=v(),
-                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
+                     y1=v(), ynew=v(), err=v(), wt=v(), jac=np.zeros((n1, n1 + N_JAC_EXTRA)),
+                     jac_end=np.zeros((n1, n1 + N_JAC_EXTRA)), lu=np.zeros((n1, n1)),
                      piv=np.zeros(n1, dtype=np.int64), gaps0=v(n), gaps1=v(n), gaps_start=v(n), gaps_end=v(n), cmat=np.zeros((n, 9)),
                      pres=v(), flows=v(N_FLOWS), flows_prev=v(N_FLOWS), ctrl=v(N_CTRL),
                      disp=v(4), peak=np.full(n, -np.inf), gear=v(N_GEAR),
