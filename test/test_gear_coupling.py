@@ -234,6 +234,19 @@ def test_warm_reactions_add_the_last_correction_on_the_same_lobe():
     assert GC.warm_reactions(gc, 1.5, 2.0) == (0.0, 12.0)
 
 
+def test_newton_converged():
+    """Closed form: the Josephy–Newton stops when its last change δ is within rtol, or when the error of the new
+    iterate estimated from the contraction Θ = δ/δ_prev, Θ/(1 − Θ)·δ, is (Hairer–Wanner IV.8); never on the
+    contraction of a first iterate (δ_prev = ∞) or of a diverging one (Θ ≥ 1)."""
+    rtol = 3e-6
+    assert GC.newton_converged(2e-6, math.inf, rtol)                 # δ itself within rtol
+    assert not GC.newton_converged(1e-4, math.inf, rtol)             # a first iterate: no contraction seen
+    assert GC.newton_converged(1e-4, 1e-2, rtol)                     # Θ = 0.01: 0.01/0.99 · 1e-4 = 1.01e-6
+    assert not GC.newton_converged(1e-3, 1e-1, rtol)                 # Θ = 0.01: 1.01e-5 > rtol
+    assert not GC.newton_converged(1e-4, 1e-4, rtol)                 # Θ = 1: no contraction
+    assert not GC.newton_converged(1e-4, 5e-5, rtol)                 # Θ = 2: diverging
+
+
 def test_the_contact_iteration_starts_from_the_last_correction(cfg):
     """Behaviour: at the default pump's rated point the gear rides on the teeth at every output step; the set-up at
     a state redone from the correction its own iteration found starts at the solution and stops after its first
