@@ -399,9 +399,10 @@ def warm_reactions(gc, l1, l2):
 
     The full film law's share of the reactions, λ* − λ^lin, changes little over the 1.5° between output steps
     where the reactions themselves follow the load; no correction on a lobe the last one did not hold.  Measured
-    per output step over a revolution (docs/performance.md): Josephy–Newton iterations 3.1 against 4.2 from the
-    linearised reactions at the default pump's rated point, 2.2 against 3.0 on 07 at 1650 rpm / 27.5 bar, where
-    starting from the last converged reactions themselves took 3.5 (the load moves more than the correction).
+    per output step over a revolution, stopping on the change itself at 3e-6 (docs/performance.md): Josephy–Newton
+    iterations 3.1 against 4.2 from the linearised reactions at the default pump's rated point, 2.1 against 3.0 on 07
+    at 1650 rpm / 27.5 bar, where starting from the last converged reactions themselves took 3.5 (the load moves
+    more than the correction).
     """
     return max(0.0, l1 + _correction_on(gc, gc[GC_LOBE1])), max(0.0, l2 + _correction_on(gc, gc[GC_LOBE2]))
 
