@@ -1,7 +1,7 @@
 """On-disk cache of the tight reference revolutions of ``gerotor-twin bench accuracy``.
 
 A reference (:func:`.accuracy.reference_revolution`) is the dearest part of an accuracy point: an
-output step 8× finer and a tolerance of 1e-8.  It depends on the pump, the operating point, the
+output step 16× finer and a tolerance of 1e-8.  It depends on the pump, the operating point, the
 outer-gear model and the code that runs it, never on the numerics under test, so an A/B of the
 twin's own numerics (a tolerance, a step-control constant) over the whole family needs each
 reference once.  The key of a cached revolution is the SHA-256 of

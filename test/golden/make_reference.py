@@ -4,7 +4,7 @@
 
 Each file is one revolution at periodic steady state of the default pump (config/pump.yaml),
 mobility model, computed with the reference numerics of gerotor_twin.model.accuracy
-(ROS2 tolerance 1e-8 on ln(ρ/ρ₀), output step 8× finer than the default's). Regenerate only
+(ROS2 tolerance 1e-8 on ln(ρ/ρ₀), output step 16× finer than the default's). Regenerate only
 when the physics or the pump config changes on purpose, and say so in the commit.
 """
 import datetime
