@@ -17,7 +17,7 @@ from gerotor_twin.model import gear_coupling as GC
 from gerotor_twin.config import load_config
 from gerotor_twin.model.accuracy import BUDGET, Revolution, compare, reference_revolution
 from gerotor_twin.model.family import family_dir
-from gerotor_twin.model.contact import contact
+from gerotor_twin.model.contact import contact, gap_coefficients, gap_value
 from gerotor_twin.model.loads import outer_gear_load
 from gerotor_twin.model.params import operating
 from gerotor_twin.model.pump import Inputs, PumpModel
@@ -62,9 +62,12 @@ def test_external_path_with_the_mobility_kernel_is_the_compiled_path(cfg):
     Python with the bearing's kernel), run with the mobility kernel, gives the compiled mobility path's
     trajectory: on the teeth each path's Josephy–Newton converges to ``contact_rtol`` of the reactions (the compiled
     one from the last step's, with G in closed form; the other from the linearised reactions, with G by finite
-    differences), so the two agree to that fraction of the gear's position (measured 7.5e-12 m over 0.03 s at
-    1000 rpm / 27.5 bar, 1.5e-17 m with both converged to ``FULL_RTOL``).  Before ``PLACEMENT_TOLERANCE`` the
-    overlap check's round-off re-projection at every call dropped the gear's squeeze velocity: 1.4 µm apart."""
+    differences), so the two agree to about that fraction of the gear's position: each sub-step's rates on the teeth
+    are taken where the stages have moved the gear (``substep_rates``), so the reactions' error at the set-up moves the
+    following sub-steps' rates as well, and the bound is twice it (measured 1.07e-10 m = 1.01 × rtol·|e| over 0.03 s
+    at 1000 rpm / 27.5 bar, at the three output steps where a wedge between two lobes releases, ≤ 4.1e-11 m at the
+    others; 7.5e-12 m with the rates held over the output step).  Before ``PLACEMENT_TOLERANCE`` the overlap check's
+    round-off re-projection at every call dropped the gear's squeeze velocity: 1.4 µm apart."""
     from gerotor_twin.model import kernel as K
     inp = Inputs(1000 * math.pi / 30, P_ATM, P_ATM + 27.5e5)
     e = {}
@@ -75,7 +78,7 @@ def test_external_path_with_the_mobility_kernel_is_the_compiled_path(cfg):
         _st, out = m.advance(m.initial_state(inp), 0.03, inp)
         e[path] = out.eccentricity
     rtol = GC.contact_rtol(m.kernel.pc)
-    assert np.abs(e["compiled"] - e["external"]).max() < rtol * np.abs(e["compiled"]).max()
+    assert np.abs(e["compiled"] - e["external"]).max() < 2.0 * rtol * np.abs(e["compiled"]).max()
 
 
 def test_compiled_method_1_is_its_python_loop_bit_for_bit(cfg):
@@ -284,6 +287,56 @@ def test_the_contact_iteration_starts_from_the_last_correction(cfg):
     assert np.array_equal(out_a.chamber_pressures[25:], out_b.chamber_pressures)
 
 
+def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
+    """Closed form: a sub-step's rate on each of the two lobes is the gap's change over the sub-step (the teeth's
+    turn) plus the gap now closed over the rest of the output step, both gaps (:func:`.contact.gap_value`'s
+    expansion, inner gear unturned) with the gear at e₀ + ∫ė dt, the pending sub-step by its trapezoid; one sub-step
+    over the whole output step from e₀ gets the set-up's own rates, and the first stage stays valid.  A first stage
+    with a reaction is stale under new rates; one without is stale exactly where its velocity closes a gap within the
+    new sub-step (n·ė + r < 0)."""
+    m = PumpModel(cfg, "mobility")
+    km, ws = m.kernel, m._ws
+    inp = Inputs(3000 * math.pi / 30, P_ATM, P_ATM + 27.5e5)
+    h = m.step_size(inp.omega)
+    s, _ = m.advance(m.initial_state(inp), 100 * h, inp)
+    gc, rows, cmat, gaps = ws.gear.copy(), ws.gear_rows.copy(), np.empty((m.N, 9)), np.empty(m.N)
+    ex, ey, _g, kc = contact(km.tab, m.N, km.pc.tip_clearance, s.theta, *s.eccentricity, gaps, cmat)
+    GC.linearise(ex, ey, s.theta, inp.omega, h, kc, km, np.asarray(s.pressures, float), gc, rows)
+    GC.set_constraint(ex, ey, s.theta + inp.omega * h, h, km, gc, cmat)
+    c = GC.GC_PAIR
+    assert not GC.substep_rates(gc, ex, ey, s.theta, s.theta + inp.omega * h, h, h, km)    # the set-up's own
+    lobes = int(gc[GC.GC_LOBE1]), int(gc[GC.GC_LOBE2])
+    gc[GC.GC_DEX], gc[GC.GC_DEY], gc[GC.GC_PEND] = 0.3e-6, -0.2e-6, 0.1 * h
+    gc[GC.GC_VPX], gc[GC.GC_VPY], gc[GC.GC_VX], gc[GC.GC_VY] = 1e-3, -2e-3, 3e-3, 1e-3
+    px = ex + 0.3e-6 + 0.5 * 0.1 * h * (1e-3 + 3e-3)
+    py = ey - 0.2e-6 + 0.5 * 0.1 * h * (-2e-3 + 1e-3)
+
+    def gap(k, frac):
+        coeff = np.empty(9)
+        gap_coefficients(km.tab, s.theta + inp.omega * frac * h, k, coeff)
+        return gap_value(coeff, km.pc.tip_clearance, px, py, 0.0)
+
+    def rates(now, end):                          # fractions of the output step
+        return np.array([(gap(k, end) - gap(k, now)) / ((end - now) * h) + gap(k, now) / ((1.0 - now) * h)
+                         for k in lobes])
+
+    def step(now, end):
+        return GC.substep_rates(gc, ex, ey, s.theta + inp.omega * now * h, s.theta + inp.omega * end * h,
+                                (end - now) * h, (1.0 - now) * h, km)
+
+    gc[GC.GC_STAGE1:GC.GC_STAGE1 + 4] = 0.0, 0.0, 5.0, 0.0                               # a reaction on lobe 1
+    assert step(0.1, 0.5)
+    np.testing.assert_allclose(gc[c + 8:c + 10], rates(0.1, 0.5), rtol=1e-9, atol=1e-12)
+    normals = gc[c:c + 4].reshape(2, 2)
+    for margin, stale in (((1e-4, 1e-4), False), ((-1e-4, 1e-4), True), ((1e-4, -1e-4), True)):
+        r = rates(0.1, 0.4)
+        v = np.linalg.solve(normals, np.array(margin) - r)                              # n_k·ė + r_k = margin_k
+        gc[GC.GC_STAGE1:GC.GC_STAGE1 + 4] = v[0], v[1], 0.0, 0.0
+        gc[c + 8] += 1.0                                                                # rates that change
+        assert step(0.1, 0.4) == stale, margin
+        np.testing.assert_allclose(gc[c + 8:c + 10], r, rtol=1e-9, atol=1e-12)
+
+
 def test_squeeze_jacobian_matches_finite_differences(warm):
     """Closed form: the squeeze part of ∂f/∂y, −(Gᵀf_j)·g_k β_k / V_j, against central differences of the
     right-hand side with the coupling on minus off, row by row; in some row it is a sizeable part of the
@@ -374,17 +427,17 @@ def test_the_tooth_constraint_leaves_the_check_nothing_to_take_back(cfg, pump, r
     assert rem["stages"] > 1e-6 and rem["constrained"] < 1e-9, rem
 
 
-@pytest.mark.parametrize("pump, rpm, bar", [("07_default_gear_set_new", 3000.0, 27.5), ("default", 3000.0, 27.5)])
+@pytest.mark.parametrize("pump, rpm, bar", [("07_default_gear_set_new", 1650.0, 27.5), ("default", 3000.0, 27.5)])
 def test_the_constrained_twin_is_within_the_budget_of_its_reference(cfg, pump, rpm, bar):
     """Behaviour against a fresh tight reference of the same scheme (``gear_coupling: constrained``), a tight pump and
     a loose one: 07 (new-pump clearances, the gear on its teeth at every output step) at its top speed and rated
     pressure, and the default pump at its rated point, where the defect check across a closing port (step_control)
     brought the constrained twin's peak from +3.35 % to +1.88 % (+0.14 % since the step starts on the teeth with the
-    reactions through the full mobility).  Every figure of the budget holds (measured 2026-12-07 with the
-    reference's output step 16× finer: 07 peak −0.51 %, RMS 0.17 % of the range; default +0.14 %, 0.11 %).  07 at
-    1650 rpm / 27.5 bar, this test's point while the reference was 8× finer (−1.89 % then), is −2.13 % against the
-    converged reference, outside the budget (issue 37; docs/numerics.md, "The pump family").  The full family is a
-    benchmark (docs/numerics.md, "The tooth contact as a constraint")."""
+    reactions through the full mobility).  07 at 1650 rpm / 27.5 bar, where the contact passes from one lobe to the
+    next inside an output step at the closing spike, needs the teeth's rates per sub-step (``substep_rates``): with
+    the set-up's rates held over the output step its peak is −2.13 %, outside the budget.  Every figure of the budget
+    holds (measured 2026-12-07 with the reference's output step 16× finer: 07 peak +0.61 %, RMS 0.24 % of the
+    range).  The full family is a benchmark (docs/numerics.md, "The pump family")."""
     base = cfg if pump == "default" else load_config(family_dir() / f"{pump}.yaml")
     c = replace(base, numerics=replace(base.numerics, gear_coupling="constrained"))
     ref = reference_revolution(c, rpm, bar, "mobility")

@@ -25,7 +25,7 @@ import numpy as np
 from .._jit import njit
 from ..geometry.tables import GX
 
-__all__ = ["locate", "column", "gap_coefficients", "gap_value", "contact"]
+__all__ = ["locate", "column", "gap_coefficients", "gap_value", "gap_unturned", "contact"]
 
 N_GAP_COEFFS = 9    # gx, gy, gγ, hxx, hxy, hyy, hxγ, hyγ, hγγ (columns GX..HGG, consecutive)
 
@@ -66,6 +66,19 @@ def gap_value(c, delta, ex, ey, g):
     return (delta + c[0] * ex + c[1] * ey + c[2] * g
             + 0.5 * (c[3] * ex * ex + 2.0 * c[4] * ex * ey + c[5] * ey * ey
                      + 2.0 * c[6] * ex * g + 2.0 * c[7] * ey * g + c[8] * g * g))
+
+
+@njit(inline="always")
+def gap_unturned(tab, theta, k, delta, ex, ey):
+    """Gap height [m] of lobe k at shaft angle θ [rad] and displacement (ex, ey) [m], the inner gear unturned
+    (:func:`gap_value` at γ = 0, from the five coefficients it needs)."""
+    i0, i1, f = locate(tab, theta + k * tab.shift)
+    cx = column(tab, GX, i0, i1, f)
+    cy = column(tab, GX + 1, i0, i1, f)
+    hxx = column(tab, GX + 3, i0, i1, f)
+    hxy = column(tab, GX + 4, i0, i1, f)
+    hyy = column(tab, GX + 5, i0, i1, f)
+    return delta + cx * ex + cy * ey + 0.5 * (hxx * ex * ex + 2.0 * hxy * ex * ey + hyy * ey * ey)
 
 
 @njit

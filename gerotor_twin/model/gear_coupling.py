@@ -54,7 +54,7 @@ from ..bearing.base import cap_eccentricity
 from ..bearing.reynolds_fd import fd_fields, fdm_kernel, fdm_load, velocity_from_fields
 from ..bearing.short_bearing import short_kernel, short_load
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
-from .contact import column, gap_coefficients, locate
+from .contact import column, gap_coefficients, gap_unturned, locate
 from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility, reactions
 
@@ -63,7 +63,8 @@ __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity"
            "linearise_with", "linearise_short", "set_velocity", "set_constraint", "velocity_jacobian", "close_pending",
            "gear_move", "held_reactions", "contact_load", "contact_newton_step", "linearise_in_contact", "short_in_contact",
            "fdm_in_contact", "film_start", "film_iterate", "set_linearisation", "FULL_ITERATIONS", "FULL_RTOL",
-           "CONTACT_RTOL_PER_TOLERANCE", "contact_rtol", "warm_reactions", "newton_converged"]
+           "CONTACT_RTOL_PER_TOLERANCE", "contact_rtol", "warm_reactions", "newton_converged",
+           "substep_rates", "keep_first_stage"]
 
 #: ``Workspace.gear``: coupling on (1) or off (0); ė₀ [m/s]; F₀ [N]; G row-major [m/(s·N)]; the contact
 #: coefficient c [1/m] and the constant load C_jb·c [N]; ė at the last right-hand side; ė at the last
@@ -76,12 +77,14 @@ __all__ = ["GC_ON", "N_GEAR", "coupled_load", "coupled_load_at", "gear_velocity"
 #: teeth with the lobes they act on (:func:`warm_reactions`; 0 where it did not converge or the gear was free), and
 #: from ``GC_CORR_BEFORE`` those four as that Josephy–Newton found them (what a state carries,
 #: :attr:`.records.PumpState.contact_correction`, so that a call that starts there sets the step up as the call
-#: before it did)
+#: before it did), then the first stage's velocity and reactions (``GC_STAGE1``)
 (GC_ON, GC_V0X, GC_V0Y, GC_F0X, GC_F0Y, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_CX, GC_CY, GC_FCX, GC_FCY,
  GC_VX, GC_VY, GC_VPX, GC_VPY, GC_DEX, GC_DEY, GC_PEND, GC_TH0, GC_TH_RAW1, GC_RAW1_OK,
  GC_CON, GC_LAM1, GC_LAM2, GC_PAIR) = range(27)
 GC_LOBE1, GC_LOBE2, GC_CORR1, GC_CORR2, GC_CORR_LOBE1, GC_CORR_LOBE2, GC_CORR_BEFORE = range(GC_PAIR + 10, GC_PAIR + 17)
-N_GEAR = GC_CORR_BEFORE + 4
+#: from ``GC_STAGE1``: ė [m/s] and λ₁, λ₂ [N] of the current first stage (:func:`keep_first_stage`)
+GC_STAGE1 = GC_CORR_BEFORE + 4
+N_GEAR = GC_STAGE1 + 4
 #: columns of ``Workspace.gear_rows`` (N, 18): per chamber f_j = ∂V_j/∂e [m³/m] and g_j = ∂F/∂p_j [N/Pa] at θ₀,
 #: their slopes in θ over the output step [1/rad], both at the angle of the last right-hand side, and the
 #: table values (FX, FY, TQ) at θ₀ and at the step's end (reused as the next step's θ₀)
@@ -280,7 +283,8 @@ def set_velocity(gc, fx, fy, v0, v1, v2, d):
 def set_constraint(ex, ey, theta, h, km, gc, cmat):
     """Switch the tooth constraint on for the output step of h [s] that ends at shaft angle θ [rad], the gear at
     (ex, ey) [m]: the two lobes whose gaps (inner gear unturned) are smallest there, their normals, G n and the
-    rates r = g/h that hold each gap at zero at the step's end (Moreau's time-stepping, :mod:`.tooth_constraint`),
+    rates r = g/h that hold each gap at zero at the step's end (Moreau's time-stepping, :mod:`.tooth_constraint`;
+    the reactions at the step's start are solved with them, each sub-step takes its own, :func:`substep_rates`),
     and the two lobes' indices.  Call after :func:`set_velocity` (G).  The gap expansions at θ are left in ``cmat`` (N, 9), where the overlap
     check at the step's end reads them (:func:`.contact.contact`, ``reuse``)."""
     tab, pc = km.tab, km.pc
@@ -615,6 +619,59 @@ def _linearise_fdm(params, ex, ey, theta, omega, h, kc, km, pres, gc, rows, cmat
     if km.pc.gear_constrained and h > 0.0:
         set_constraint(ex, ey, theta + omega * h, h, km, gc, cmat)
         fdm_in_contact(p_w, p_x, p_y, cos_t, sin_t, area, gc)
+
+
+@njit(inline="always")
+def keep_first_stage(gc):
+    """Note the gear's velocity and reactions of the right-hand side just evaluated (the sub-step's first stage), which
+    :func:`substep_rates` judges that stage's validity by."""
+    gc[GC_STAGE1], gc[GC_STAGE1 + 1] = gc[GC_VX], gc[GC_VY]
+    gc[GC_STAGE1 + 2], gc[GC_STAGE1 + 3] = gc[GC_LAM1], gc[GC_LAM2]
+
+
+@njit(inline="always")
+def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km):
+    r"""The rates [m/s] of the two lobes :func:`set_constraint` chose, for the ROS2 sub-step of h [s] from θ_now to
+    θ_end [rad], with ``remaining`` [s] of the output step left at its start: the gap's change over the sub-step at
+    the gear's present position (the teeth's turn) plus the present gap closed over the rest of the output step,
+
+    .. math::
+        r_k = \frac{g_k(\mathbf e, \theta_{end}) - g_k(\mathbf e, \theta_{now})}{h}
+            + \frac{g_k(\mathbf e, \theta_{now})}{H_{rem}},\qquad
+        \mathbf e = \mathbf e_0 + \textstyle\int\dot{\mathbf e}\,dt
+
+    (Moreau's time-stepping, :mod:`.tooth_constraint`; (ex, ey) = e₀ [m], the output step's start; ∫ė dt over
+    the accepted sub-steps, the last one's trapezoid closed with the velocity of the last right-hand side).  Over a
+    single sub-step, or the output step's last, it is g_k(e, θ_end)/h, and from e₀ over the whole output step the
+    set-up's own rates.  The turn taken per sub-step lets a lobe that recedes or closes inside the output step hold
+    or release the gear where it does, where the set-up's rates spread it over the whole step; the gap (or what the
+    trapezoid leaves of an overlap) closed over the rest of the step, not over the sub-step, keeps the rates finite
+    as h shrinks (Moreau's g/h over a rejected sub-step's retry drives the gear at |g|/h; docs/numerics.md, "The
+    tooth contact as a constraint").  Returns True where the first stage already evaluated
+    (:func:`keep_first_stage`) does not hold under the new rates: it had a reaction, or its velocity would close a
+    gap within the sub-step (n·ė + r < 0); a free gear's first stage stays valid, bit for bit, and so does any whose
+    rates are unchanged.
+    """
+    c = GC_PAIR
+    px = ex + gc[GC_DEX] + 0.5 * gc[GC_PEND] * (gc[GC_VPX] + gc[GC_VX])
+    py = ey + gc[GC_DEY] + 0.5 * gc[GC_PEND] * (gc[GC_VPY] + gc[GC_VY])
+    delta = km.pc.tip_clearance
+    k1, k2 = int(gc[GC_LOBE1]), int(gc[GC_LOBE2])
+    r1 = gap_unturned(km.tab, theta_end, k1, delta, px, py) / h
+    r2 = gap_unturned(km.tab, theta_end, k2, delta, px, py) / h
+    if h < remaining:                   # the gap now is closed over the rest of the output step, not this sub-step
+        g1 = gap_unturned(km.tab, theta_now, k1, delta, px, py)
+        g2 = gap_unturned(km.tab, theta_now, k2, delta, px, py)
+        r1 += g1 * (1.0 / remaining - 1.0 / h)
+        r2 += g2 * (1.0 / remaining - 1.0 / h)
+    if r1 == gc[c + 8] and r2 == gc[c + 9]:            # the output step's own rates (one sub-step from e₀)
+        return False
+    gc[c + 8] = r1
+    gc[c + 9] = r2
+    if gc[GC_STAGE1 + 2] != 0.0 or gc[GC_STAGE1 + 3] != 0.0:
+        return True
+    vx, vy = gc[GC_STAGE1], gc[GC_STAGE1 + 1]
+    return gc[c] * vx + gc[c + 1] * vy + gc[c + 8] < 0.0 or gc[c + 2] * vx + gc[c + 3] * vy + gc[c + 9] < 0.0
 
 
 @njit(inline="always")

@@ -63,8 +63,8 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
-from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND,
-                            close_pending, gear_move, linearise_mobility, linearise_short, linearise_with)
+from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND, GC_CON,
+                            close_pending, keep_first_stage, substep_rates, gear_move, linearise_mobility, linearise_short, linearise_with)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY, FRESH_IN_F0, FRESH_IN_F1, FRESH_NONE)
@@ -197,6 +197,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
         rhs(y, th, ws.gaps0, km, op, ws, ws.f0, ws.jac, bool(True))   # bool(): not a literal (flows.rhs, Notes)
     if ws.gear[GC_ON] != 0.0:
         close_pending(ws.gear)                      # ∫ė dt of the last accepted sub-step (gear_coupling)
+        keep_first_stage(ws.gear)
     ws.ctrl[CT_CLOSING] = closing_ports(km.pc, op, ws.p, ws.rho, ws.geo, ws.jac, CLOSING_HORIZON * big_h)
     error_weights(km, op, ws, CLOSING_HORIZON * big_h)
     defect_threshold(km, op, ws, big_h)
@@ -261,6 +262,27 @@ def _defect_norm(th2, h, km, op, ws):    # right-hand side in the stepper cost 1
 
 
 @njit(inline="always")
+def _teeth_rates(ex, ey, th, th2, h, remaining, km, ws):
+    """With the tooth constraint on, the teeth's rates of the sub-step of h [s] from θ = ``th`` to ``th2`` [rad] with
+    ``remaining`` [s] of the output step left (:func:`.gear_coupling.substep_rates`; (ex, ey) the step's start [m]);
+    True where the first stage in hand no longer holds under them."""
+    if ws.gear[GC_ON] == 0.0 or ws.gear[GC_CON] == 0.0:
+        return False
+    return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km)
+
+
+@njit(inline="always")
+def _first_substep_rates(ex, ey, theta, big_h, km, op, ws):
+    """The teeth's rates of the first sub-step :func:`pressure_step` will try in the output step of ``big_h`` [s] from
+    θ [rad] (the sub-step carried in ``ws.ctrl[CT_SUBSTEP]``), set before the step's first stage is evaluated, so that
+    it holds there."""
+    h = big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
+    h = min(max(h, big_h * 1e-5), big_h)
+    th2 = theta + op.omega * big_h if h >= big_h * (1.0 - 1e-12) else theta + op.omega * h
+    _teeth_rates(ex, ey, theta, th2, h, big_h, km, ws)
+
+
+@njit(inline="always")
 def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     """Advance the pressures over one output step ``big_h`` [s] with adaptive ROS2 sub-steps.
 
@@ -291,12 +313,14 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         attempts += 1
         if attempts > ws.ctrl[CT_BOUND]:
             return STEP_WORK_BOUND
-        h = min(h, big_h - done)
-        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # first stage at (y, θ)
-            _first_stage(y, th, km, op, ws, integrals, big_h)
-        h = min(max(h, h_min), big_h - done)
+        h = min(max(min(h, big_h - done), h_min), big_h - done)
         last = done + h >= big_h * (1.0 - 1e-12)
         th2 = theta + op.omega * big_h if last else th + op.omega * h   # the step's end: integrate's angle
+        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # a new state: its teeth's rates (a retry keeps them)
+            if _teeth_rates(ex, ey, th, th2, h, big_h - done, km, ws) and ws.ctrl[CT_FRESH] == FRESH_IN_F1:
+                ws.ctrl[CT_FRESH] = FRESH_NONE          # the defect check's reactions change with them
+        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # first stage at (y, θ)
+            _first_stage(y, th, km, op, ws, integrals, big_h)
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
@@ -325,6 +349,8 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
             # the defect check's RHS at this state serves the next first stage, unless the output step ends here
             # (the gear's move and the overlap check change the gaps and the volumes before it)
             ws.ctrl[CT_FRESH] = FRESH_IN_F1 if checked and not last else FRESH_NONE
+            if checked and ws.gear[GC_ON] != 0.0:
+                keep_first_stage(ws.gear)             # the defect check's right-hand side: the next first stage's
             done += h
             th = th2
             counters[C_SUBSTEPS] += 1
@@ -455,6 +481,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             ws.ctrl[CT_CMAT_END] = 1.0             # and the step's end: pressure_step's tip gaps read them
     ws.ctrl[CT_PENDING] = 0.0
     ws.ctrl[CT_FRESH] = FRESH_NONE                 # a call starts with its own first stage
+    if coupled:
+        _first_substep_rates(ex, ey, theta, h, km, op, ws)
     _first_stage(y, theta, km, op, ws, integrals, h)
     ws.peak[:] = -math.inf
     fade = math.exp(-abs(op.omega) * h / (2.0 * math.pi))     # of the error scale's range, per output step
@@ -499,6 +527,7 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
             if linearise_mobility(ex, ey, theta, op.omega, h, kc, km, ws.pres, ws.gear, ws.gear_rows, ws.cmat,
                                   constraint is not None):
                 ws.ctrl[CT_CMAT_END] = 1.0
+            _first_substep_rates(ex, ey, theta, h, km, op, ws)
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)

@@ -20,9 +20,11 @@ load G is taken at.  A reaction comparable with the load turns it, where the mob
 and G at the load the film carries there, the reactions solved through the full mobility
 (:func:`.gear_coupling.linearise_in_contact`), and the form above is exact at the step's start.  The symmetric
 part of G is positive definite for a dissipative film, so :math:`\mathbf n^T G \mathbf n > 0` and nothing is
-singular.  Over a step of h the time-stepping form of [2] (sec. 3) takes :math:`r = g_k(\mathbf e_0,
-\theta_0 + \omega h)/h`: the gap at the step's end, linearised in the move, is held at zero; a gap the free
-motion does not close within the step leaves :math:`\lambda = 0`.  The velocity is linear in the load where
+singular.  Over a step of h from the position :math:`\mathbf e` the time-stepping form of [2] (sec. 3) takes
+:math:`r = g_k(\mathbf e, \theta + \omega h)/h`: the gap at the step's end, linearised in the move, is held at
+zero; a gap the free motion does not close within the step leaves :math:`\lambda = 0`.  The stepper takes it per
+ROS2 sub-step, from where the stages have moved the gear (:func:`.gear_coupling.substep_rates`), so a contact that
+passes from one lobe to the next inside an output step passes where the gaps say it does.  The velocity is linear in the load where
 :math:`\lambda > 0`, with the projected mobility
 
 .. math::
