@@ -291,7 +291,8 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
     """Closed form: a sub-step's rate on each of the two lobes is the gap's change over the sub-step (the teeth's
     turn) plus the gap now closed over the rest of the output step, both gaps (:func:`.contact.gap_value`'s
     expansion, inner gear unturned) with the gear at e₀ + ∫ė dt, the pending sub-step by its trapezoid; one sub-step
-    over the whole output step from e₀ gets the set-up's own rates, and the first stage stays valid.  A first stage
+    over the whole output step from e₀ gets the set-up's own rates, and the first stage stays valid; the output step's
+    last sub-step reads the gaps there from set_constraint's expansions, bit for bit the tables'.  A first stage
     with a reaction is stale under new rates; one without is stale exactly where its velocity closes a gap within the
     new sub-step (n·ė + r < 0)."""
     m = PumpModel(cfg, "mobility")
@@ -304,7 +305,7 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
     GC.linearise(ex, ey, s.theta, inp.omega, h, kc, km, np.asarray(s.pressures, float), gc, rows)
     GC.set_constraint(ex, ey, s.theta + inp.omega * h, h, km, gc, cmat)
     c = GC.GC_PAIR
-    assert not GC.substep_rates(gc, ex, ey, s.theta, s.theta + inp.omega * h, h, h, km)    # the set-up's own
+    assert not GC.substep_rates(gc, ex, ey, s.theta, s.theta + inp.omega * h, h, h, km, None)  # the set-up's own
     lobes = int(gc[GC.GC_LOBE1]), int(gc[GC.GC_LOBE2])
     gc[GC.GC_DEX], gc[GC.GC_DEY], gc[GC.GC_PEND] = 0.3e-6, -0.2e-6, 0.1 * h
     gc[GC.GC_VPX], gc[GC.GC_VPY], gc[GC.GC_VX], gc[GC.GC_VY] = 1e-3, -2e-3, 3e-3, 1e-3
@@ -320,9 +321,9 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
         return np.array([(gap(k, end) - gap(k, now)) / ((end - now) * h) + gap(k, now) / ((1.0 - now) * h)
                          for k in lobes])
 
-    def step(now, end):
+    def step(now, end, coeffs=None):
         return GC.substep_rates(gc, ex, ey, s.theta + inp.omega * now * h, s.theta + inp.omega * end * h,
-                                (end - now) * h, (1.0 - now) * h, km)
+                                (end - now) * h, (1.0 - now) * h, km, coeffs)
 
     gc[GC.GC_STAGE1:GC.GC_STAGE1 + 4] = 0.0, 0.0, 5.0, 0.0                               # a reaction on lobe 1
     assert step(0.1, 0.5)
@@ -335,6 +336,12 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
         gc[c + 8] += 1.0                                                                # rates that change
         assert step(0.1, 0.4) == stale, margin
         np.testing.assert_allclose(gc[c + 8:c + 10], r, rtol=1e-9, atol=1e-12)
+    step(0.6, 1.0)                                      # the output step's last sub-step: from the tables ...
+    from_tables = gc[c + 8:c + 10].copy()
+    gc[c + 8] += 1.0
+    step(0.6, 1.0, cmat)                                # ... and from set_constraint's expansions there: the same
+    assert np.array_equal(gc[c + 8:c + 10], from_tables)
+    np.testing.assert_allclose(from_tables, [gap(k, 1.0) / (0.4 * h) for k in lobes], rtol=1e-9, atol=1e-12)
 
 
 def test_squeeze_jacobian_matches_finite_differences(warm):

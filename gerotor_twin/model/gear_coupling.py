@@ -54,7 +54,7 @@ from ..bearing.base import cap_eccentricity
 from ..bearing.reynolds_fd import fd_fields, fdm_kernel, fdm_load, velocity_from_fields
 from ..bearing.short_bearing import short_kernel, short_load
 from ..geometry.tables import ARM, FX, FY, GX, GY, TQ
-from .contact import column, gap_coefficients, gap_unturned, locate
+from .contact import column, gap_coefficients, gap_unturned, gap_value, locate
 from .loads import journal_torque
 from .tooth_constraint import constrained_velocity, contact_pair, projected_mobility, reactions
 
@@ -630,7 +630,7 @@ def keep_first_stage(gc):
 
 
 @njit(inline="always")
-def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km):
+def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km, end_coeffs):
     r"""The rates [m/s] of the two lobes :func:`set_constraint` chose, for the ROS2 sub-step of h [s] from θ_now to
     θ_end [rad], with ``remaining`` [s] of the output step left at its start: the gap's change over the sub-step at
     the gear's present position (the teeth's turn) plus the present gap closed over the rest of the output step,
@@ -647,7 +647,9 @@ def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km):
     or release the gear where it does, where the set-up's rates spread it over the whole step; the gap (or what the
     trapezoid leaves of an overlap) closed over the rest of the step, not over the sub-step, keeps the rates finite
     as h shrinks (Moreau's g/h over a rejected sub-step's retry drives the gear at |g|/h; docs/numerics.md, "The
-    tooth contact as a constraint").  Returns True where the first stage already evaluated
+    tooth contact as a constraint").  ``end_coeffs``: where θ_end is the output step's end, the gap expansions
+    :func:`set_constraint` left there (``Workspace.cmat``, the same values as the tables give), else None.  Returns
+    True where the first stage already evaluated
     (:func:`keep_first_stage`) does not hold under the new rates: it had a reaction, or its velocity would close a
     gap within the sub-step (n·ė + r < 0); a free gear's first stage stays valid, bit for bit, and so does any whose
     rates are unchanged.
@@ -657,8 +659,12 @@ def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km):
     py = ey + gc[GC_DEY] + 0.5 * gc[GC_PEND] * (gc[GC_VPY] + gc[GC_VY])
     delta = km.pc.tip_clearance
     k1, k2 = int(gc[GC_LOBE1]), int(gc[GC_LOBE2])
-    r1 = gap_unturned(km.tab, theta_end, k1, delta, px, py) / h
-    r2 = gap_unturned(km.tab, theta_end, k2, delta, px, py) / h
+    if end_coeffs is not None:          # θ_end is the output step's end: its expansions, from set_constraint
+        r1 = gap_value(end_coeffs[k1], delta, px, py, 0.0) / h
+        r2 = gap_value(end_coeffs[k2], delta, px, py, 0.0) / h
+    else:
+        r1 = gap_unturned(km.tab, theta_end, k1, delta, px, py) / h
+        r2 = gap_unturned(km.tab, theta_end, k2, delta, px, py) / h
     if h < remaining:                   # the gap now is closed over the rest of the output step, not this sub-step
         g1 = gap_unturned(km.tab, theta_now, k1, delta, px, py)
         g2 = gap_unturned(km.tab, theta_now, k2, delta, px, py)

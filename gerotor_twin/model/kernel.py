@@ -262,13 +262,16 @@ def _defect_norm(th2, h, km, op, ws):    # right-hand side in the stepper cost 1
 
 
 @njit(inline="always")
-def _teeth_rates(ex, ey, th, th2, h, remaining, km, ws):
+def _teeth_rates(ex, ey, th, th2, h, remaining, at_end, km, ws):
     """With the tooth constraint on, the teeth's rates of the sub-step of h [s] from θ = ``th`` to ``th2`` [rad] with
     ``remaining`` [s] of the output step left (:func:`.gear_coupling.substep_rates`; (ex, ey) the step's start [m]);
+    ``at_end``: it ends the output step and ``ws.cmat`` holds the gap expansions there (inside :func:`pressure_step`).
     True where the first stage in hand no longer holds under them."""
     if ws.gear[GC_ON] == 0.0 or ws.gear[GC_CON] == 0.0:
         return False
-    return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km)
+    if at_end:
+        return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km, ws.cmat)
+    return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km, None)
 
 
 @njit(inline="always")
@@ -278,8 +281,10 @@ def _first_substep_rates(ex, ey, theta, big_h, km, op, ws):
     it holds there."""
     h = big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
     h = min(max(h, big_h * 1e-5), big_h)
+    if h == big_h:                  # one sub-step from the step's start: the set-up's own rates
+        return
     th2 = theta + op.omega * big_h if h >= big_h * (1.0 - 1e-12) else theta + op.omega * h
-    _teeth_rates(ex, ey, theta, th2, h, big_h, km, ws)
+    _teeth_rates(ex, ey, theta, th2, h, big_h, False, km, ws)     # ws.cmat: the step's start, on the external path
 
 
 @njit(inline="always")
@@ -317,7 +322,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         last = done + h >= big_h * (1.0 - 1e-12)
         th2 = theta + op.omega * big_h if last else th + op.omega * h   # the step's end: integrate's angle
         if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # a new state: its teeth's rates (a retry keeps them)
-            if _teeth_rates(ex, ey, th, th2, h, big_h - done, km, ws) and ws.ctrl[CT_FRESH] == FRESH_IN_F1:
+            if _teeth_rates(ex, ey, th, th2, h, big_h - done, last, km, ws) and ws.ctrl[CT_FRESH] == FRESH_IN_F1:
                 ws.ctrl[CT_FRESH] = FRESH_NONE          # the defect check's reactions change with them
         if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # first stage at (y, θ)
             _first_stage(y, th, km, op, ws, integrals, big_h)
