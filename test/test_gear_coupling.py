@@ -305,7 +305,8 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
     GC.linearise(ex, ey, s.theta, inp.omega, h, kc, km, np.asarray(s.pressures, float), gc, rows)
     GC.set_constraint(ex, ey, s.theta + inp.omega * h, h, km, gc, cmat)
     c = GC.GC_PAIR
-    assert not GC.substep_rates(gc, ex, ey, s.theta, s.theta + inp.omega * h, h, h, km, None)  # the set-up's own
+    delta = km.pc.tip_clearance                                                         # the set-up's own rates:
+    assert not GC.substep_rates(gc, ex, ey, s.theta, s.theta + inp.omega * h, h, h, km.tab, delta, cmat, False)
     lobes = int(gc[GC.GC_LOBE1]), int(gc[GC.GC_LOBE2])
     gc[GC.GC_DEX], gc[GC.GC_DEY], gc[GC.GC_PEND] = 0.3e-6, -0.2e-6, 0.1 * h
     gc[GC.GC_VPX], gc[GC.GC_VPY], gc[GC.GC_VX], gc[GC.GC_VY] = 1e-3, -2e-3, 3e-3, 1e-3
@@ -321,9 +322,9 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
         return np.array([(gap(k, end) - gap(k, now)) / ((end - now) * h) + gap(k, now) / ((1.0 - now) * h)
                          for k in lobes])
 
-    def step(now, end, coeffs=None):
+    def step(now, end, at_end=False):
         return GC.substep_rates(gc, ex, ey, s.theta + inp.omega * now * h, s.theta + inp.omega * end * h,
-                                (end - now) * h, (1.0 - now) * h, km, coeffs)
+                                (end - now) * h, (1.0 - now) * h, km.tab, delta, cmat, at_end)
 
     gc[GC.GC_STAGE1:GC.GC_STAGE1 + 4] = 0.0, 0.0, 5.0, 0.0                               # a reaction on lobe 1
     assert step(0.1, 0.5)
@@ -339,7 +340,7 @@ def test_substep_rates_take_the_gap_where_the_stages_moved_the_gear(cfg):
     step(0.6, 1.0)                                      # the output step's last sub-step: from the tables ...
     from_tables = gc[c + 8:c + 10].copy()
     gc[c + 8] += 1.0
-    step(0.6, 1.0, cmat)                                # ... and from set_constraint's expansions there: the same
+    step(0.6, 1.0, True)                                # ... and from set_constraint's expansions there: the same
     assert np.array_equal(gc[c + 8:c + 10], from_tables)
     np.testing.assert_allclose(from_tables, [gap(k, 1.0) / (0.4 * h) for k in lobes], rtol=1e-9, atol=1e-12)
 

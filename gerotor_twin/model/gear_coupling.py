@@ -629,8 +629,8 @@ def keep_first_stage(gc):
     gc[GC_STAGE1 + 2], gc[GC_STAGE1 + 3] = gc[GC_LAM1], gc[GC_LAM2]
 
 
-@njit(inline="always")
-def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km, end_coeffs):
+@njit          # called, not inlined: inlined at the stepper's sites it added 7–10 s to the first compile
+def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, tab, delta, cmat, at_end):
     r"""The rates [m/s] of the two lobes :func:`set_constraint` chose, for the ROS2 sub-step of h [s] from θ_now to
     θ_end [rad], with ``remaining`` [s] of the output step left at its start: the gap's change over the sub-step at
     the gear's present position (the teeth's turn) plus the present gap closed over the rest of the output step,
@@ -647,9 +647,9 @@ def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km, end_coeffs
     or release the gear where it does, where the set-up's rates spread it over the whole step; the gap (or what the
     trapezoid leaves of an overlap) closed over the rest of the step, not over the sub-step, keeps the rates finite
     as h shrinks (Moreau's g/h over a rejected sub-step's retry drives the gear at |g|/h; docs/numerics.md, "The
-    tooth contact as a constraint").  ``end_coeffs``: where θ_end is the output step's end, the gap expansions
-    :func:`set_constraint` left there (``Workspace.cmat``, the same values as the tables give), else None.  Returns
-    True where the first stage already evaluated
+    tooth contact as a constraint").  ``tab``: the kernel tables; ``delta``: the nominal tip clearance [m];
+    ``at_end``: θ_end is the output step's end, whose gap expansions :func:`set_constraint` left in ``cmat`` (the
+    same values as the tables give).  Returns True where the first stage already evaluated
     (:func:`keep_first_stage`) does not hold under the new rates: it had a reaction, or its velocity would close a
     gap within the sub-step (n·ė + r < 0); a free gear's first stage stays valid, bit for bit, and so does any whose
     rates are unchanged.
@@ -657,17 +657,16 @@ def substep_rates(gc, ex, ey, theta_now, theta_end, h, remaining, km, end_coeffs
     c = GC_PAIR
     px = ex + gc[GC_DEX] + 0.5 * gc[GC_PEND] * (gc[GC_VPX] + gc[GC_VX])
     py = ey + gc[GC_DEY] + 0.5 * gc[GC_PEND] * (gc[GC_VPY] + gc[GC_VY])
-    delta = km.pc.tip_clearance
     k1, k2 = int(gc[GC_LOBE1]), int(gc[GC_LOBE2])
-    if end_coeffs is not None:          # θ_end is the output step's end: its expansions, from set_constraint
-        r1 = gap_value(end_coeffs[k1], delta, px, py, 0.0) / h
-        r2 = gap_value(end_coeffs[k2], delta, px, py, 0.0) / h
+    if at_end:                          # θ_end is the output step's end: its expansions, from set_constraint
+        r1 = gap_value(cmat[k1], delta, px, py, 0.0) / h
+        r2 = gap_value(cmat[k2], delta, px, py, 0.0) / h
     else:
-        r1 = gap_unturned(km.tab, theta_end, k1, delta, px, py) / h
-        r2 = gap_unturned(km.tab, theta_end, k2, delta, px, py) / h
+        r1 = gap_unturned(tab, theta_end, k1, delta, px, py) / h
+        r2 = gap_unturned(tab, theta_end, k2, delta, px, py) / h
     if h < remaining:                   # the gap now is closed over the rest of the output step, not this sub-step
-        g1 = gap_unturned(km.tab, theta_now, k1, delta, px, py)
-        g2 = gap_unturned(km.tab, theta_now, k2, delta, px, py)
+        g1 = gap_unturned(tab, theta_now, k1, delta, px, py)
+        g2 = gap_unturned(tab, theta_now, k2, delta, px, py)
         r1 += g1 * (1.0 / remaining - 1.0 / h)
         r2 += g2 * (1.0 / remaining - 1.0 / h)
     if r1 == gc[c + 8] and r2 == gc[c + 9]:            # the output step's own rates (one sub-step from e₀)

@@ -269,9 +269,7 @@ def _teeth_rates(ex, ey, th, th2, h, remaining, at_end, km, ws):
     True where the first stage in hand no longer holds under them."""
     if ws.gear[GC_ON] == 0.0 or ws.gear[GC_CON] == 0.0:
         return False
-    if at_end:
-        return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km, ws.cmat)
-    return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km, None)
+    return substep_rates(ws.gear, ex, ey, th, th2, h, remaining, km.tab, km.pc.tip_clearance, ws.cmat, at_end)
 
 
 @njit(inline="always")
