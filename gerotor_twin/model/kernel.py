@@ -63,8 +63,9 @@ from ..bearing.mobility import mobility_kernel
 from ..hydraulics.state_equation import pressure_of
 from .contact import contact
 from .flows import closing_ports, closing_share, rhs
-from .gear_coupling import (GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR, GC_PEND, GC_CON,
-                            close_pending, keep_first_stage, substep_rates, gear_move, linearise_mobility, linearise_short, linearise_with)
+from .gear_coupling import (GC_CON, GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY, GC_GYX, GC_GYY, GC_ON, GC_PAIR,
+                            GC_PEND, close_pending, gear_move, keep_first_stage, linearise_mobility, linearise_short,
+                            linearise_with, substep_rates)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
                      FL_DELIVERY, FRESH_IN_F0, FRESH_IN_F1, FRESH_NONE)
@@ -273,12 +274,18 @@ def _teeth_rates(ex, ey, th, th2, h, remaining, at_end, km, ws):
 
 
 @njit(inline="always")
+def _proposed_substep(big_h, ws):
+    """The sub-step [s] carried from the last output step (``ws.ctrl[CT_SUBSTEP]``), at most ``big_h``; ``big_h``
+    if none."""
+    return big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
+
+
+@njit(inline="always")
 def _first_substep_rates(ex, ey, theta, big_h, km, op, ws):
     """The teeth's rates of the first sub-step :func:`pressure_step` will try in the output step of ``big_h`` [s] from
     θ [rad] (the sub-step carried in ``ws.ctrl[CT_SUBSTEP]``), set before the step's first stage is evaluated, so that
     it holds there."""
-    h = big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
-    h = min(max(h, big_h * 1e-5), big_h)
+    h = min(max(_proposed_substep(big_h, ws), big_h * 1e-5), big_h)
     if h == big_h:                  # one sub-step from the step's start: the set-up's own rates
         return
     th2 = theta + op.omega * big_h if h >= big_h * (1.0 - 1e-12) else theta + op.omega * h
@@ -300,7 +307,7 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
     """
     pc = km.pc
     n1 = y.shape[0]
-    h = big_h if ws.ctrl[CT_SUBSTEP] <= 0.0 else min(big_h, ws.ctrl[CT_SUBSTEP])
+    h = _proposed_substep(big_h, ws)
     h_min = big_h * 1e-5
     done = 0.0
     # gaps at the end of the output step; inside it they are interpolated linearly in time (the expansions there
@@ -319,11 +326,10 @@ def pressure_step(y, theta, big_h, ex, ey, km, op, ws, counters, integrals):
         h = min(max(min(h, big_h - done), h_min), big_h - done)
         last = done + h >= big_h * (1.0 - 1e-12)
         th2 = theta + op.omega * big_h if last else th + op.omega * h   # the step's end: integrate's angle
-        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # a new state: its teeth's rates (a retry keeps them)
+        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # a new state (a retry keeps its rates and first stage):
             if _teeth_rates(ex, ey, th, th2, h, big_h - done, last, km, ws) and ws.ctrl[CT_FRESH] == FRESH_IN_F1:
-                ws.ctrl[CT_FRESH] = FRESH_NONE          # the defect check's reactions change with them
-        if ws.ctrl[CT_FRESH] != FRESH_IN_F0:            # first stage at (y, θ)
-            _first_stage(y, th, km, op, ws, integrals, big_h)
+                ws.ctrl[CT_FRESH] = FRESH_NONE          # the defect check's reactions change with the teeth's rates
+            _first_stage(y, th, km, op, ws, integrals, big_h)       # first stage at (y, θ)
         w = (done + h) / big_h
         for k in range(pc.n):
             ws.gaps1[k] = ws.gaps_start[k] + w * (ws.gaps_end[k] - ws.gaps_start[k])
