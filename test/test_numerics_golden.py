@@ -130,6 +130,27 @@ def test_peak_output_sees_the_spike_the_output_grid_misses(cfg):
     assert np.all(o.chamber_peak_pressures[1:] >= o.chamber_pressures[:-1])
 
 
+@pytest.mark.parametrize("model,rpm", [("fixed", 1375.0), ("mobility", 2500.0)])
+def test_the_delivery_flow_of_a_stiff_open_chamber_is_within_budget(model, rpm):
+    """Behaviour against a fresh tight reference: a worn 80-bar pump not in the family
+    (test/data/pump_80bar_worn.yaml) at its top pressure, where a chamber wide open to the delivery port relaxes
+    far faster than a sub-step.  Its pressure comes out of the stepper within 0.01 bar of the reference, and the
+    port flow G·(p_j − p_d) multiplies that by the port's conductance: the delivery flow sampled from the
+    right-hand side at the output step's end read 1.18 % (fixed centre, 1375 rpm) and 1.68 % (mobility, 2500 rpm)
+    of the mean flow against the reference, over the 1 % budget, while the output step's delivered volume was
+    within 0.2 % of the reference's.  The flow taken as the rate of that volume from the last sub-step's stages
+    (``kernel._delivery_flow``) reads 0.56 % and 0.86 % (measured 2026-12-07; docs/numerics.md, "The delivery
+    flow at the output points"); the rest of the budget holds too."""
+    from pathlib import Path
+    bar = 80.0
+    cfg = load_config(Path(__file__).parent / "data" / "pump_80bar_worn.yaml")
+    ref = reference_revolution(cfg, rpm, bar, model)
+    res = run_steady(PumpModel(cfg, model), rpm, bar, max_revolutions=40, rtol=1e-6)
+    err = compare(Revolution.of(res), ref, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
+    for key, bound in BUDGET.items():
+        assert abs(err[key]) <= bound, (key, err[key])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("rpm,bar", POINTS + LOW_POINTS)
 def test_golden_reference_is_reproduced_by_todays_model(cfg, rpm, bar):

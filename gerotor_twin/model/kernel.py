@@ -68,9 +68,9 @@ from .gear_coupling import (GC_CON, GC_CX, GC_CY, GC_DEX, GC_DEY, GC_GXX, GC_GXY
                             linearise_with, substep_rates)
 from .loads import outer_gear_load
 from .params import (CT_BOUND, CT_CLOSING, CT_CMAT_END, CT_FRESH, CT_GEO_OK, CT_PENDING, CT_RANGE, CT_STATUS, CT_SUBSTEP,  # noqa: F401
-                     FL_DELIVERY, FRESH_IN_F0, FRESH_IN_F1, FRESH_NONE)
-from .step_control import (GAMMA, defect_error, defect_threshold, embedded_error, error_norm, error_weights,
-                           port_filtered, step_factor, update_range)
+                     FL_DELIVERY, FL_RESTRICTION, FRESH_IN_F0, FRESH_IN_F1, FRESH_NONE)
+from .step_control import (B1_END, B2_END, GAMMA, defect_error, defect_threshold, embedded_error, error_norm,
+                           error_weights, port_filtered, step_factor, update_range)
 from .tooth_constraint import pull_back_along
 from .volumes import move_volumes
 
@@ -432,11 +432,32 @@ def housing_cap(ex, ey, pc, counters):
 
 
 @njit(inline="always")
-def _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws):
+def _delivery_flow(pc, ws):
+    r"""The delivery flow at the end of an output step [m³/s], from its last ROS2 sub-step's stages ``ws.k1``,
+    ``ws.k2`` (and, in restriction mode, ``ws.flows`` at the end state):
+
+    .. math:: Q = s\,\big(b_1'(1)\,k_{1,N} + b_2'(1)\,k_{2,N}\big) + Q_r
+
+    the rate at the sub-step's end of ROS2's continuous extension (``B1_END``, ``B2_END``) of component N: with an
+    imposed delivery pressure the delivered-volume quadrature (s = 1, Q_r = 0), in restriction mode the delivery
+    line's ln ρ (s its volume, Q_r the restriction's flow). It is the flow whose integral is the delivered volume.
+    The right-hand side at the end state is not: a chamber open to the delivery port relaxes within microseconds,
+    and its port flow G·(p_j − p_d) multiplies the state's error in p_j, however small, by the port's
+    conductance G (docs/numerics.md, "The delivery flow at the output points").
+    """
+    rate = B1_END * ws.k1[pc.n] + B2_END * ws.k2[pc.n]
+    if pc.restriction:
+        return pc.line_volume * rate + ws.flows[FL_RESTRICTION]
+    return rate
+
+
+@njit(inline="always")
+def _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws, q_delivery):
     fl = ws.flows
     rec[n, R_T] = t
     rec[n, R_THETA] = theta
-    for i in range(5):                         # FL_DELIVERY .. FL_RESTRICTION
+    rec[n, R_QDEL] = q_delivery
+    for i in range(1, 5):                      # FL_SUCTION .. FL_RESTRICTION
         rec[n, R_QDEL + i] = fl[i]
     rec[n, R_PD] = ws.pres[ws.pres.shape[0] - 1]
     rec[n, R_EX] = ex
@@ -537,9 +558,9 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
                                   constraint is not None):
                 ws.ctrl[CT_CMAT_END] = 1.0
             _first_substep_rates(ex, ey, theta, h, km, op, ws)
-        _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded) = next first stage
+        _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded, but the delivery's) = next first stage
         counters[C_STEPS] += 1
-        _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws)
+        _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws, _delivery_flow(pc, ws))
     e[0] = ex
     e[1] = ey
     return theta, t

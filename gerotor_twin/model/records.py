@@ -87,7 +87,8 @@ class Outputs:
     chamber_pressures: np.ndarray   #: (n, N) [Pa]
     chamber_peak_pressures: np.ndarray  #: (n, N) each chamber's highest pressure over the step ending at row i [Pa]
     delivery_pressure: np.ndarray   #: [Pa]
-    delivery_flow: np.ndarray       #: net flow out of the delivery port [m³/s]
+    delivery_flow: np.ndarray       #: net flow out of the delivery port at the step's end, from the stepper's stages [m³/s]
+    #: (:func:`.kernel._delivery_flow`: the rate of the delivered volume, docs/numerics.md)
     suction_flow: np.ndarray        #: flow in through the suction port [m³/s]
     leak_suction_delivery: np.ndarray  #: [m³/s]
     leak_drain: np.ndarray          #: [m³/s]
