@@ -183,9 +183,10 @@ def test_air_parameter_sets_the_free_air_closed_form():
 
 
 def test_plateaus_outside_the_envelope_are_named_and_left_out():
-    """Behaviour: a plateau a biased pressure sensor reads just beyond the pump's top pressure (27.64 bar on a
-    27.5 bar pump) is left out of the fit with one reason naming the field, value and range — not a traceback
-    from the steady run — and the plateaus inside are kept; a shaft speed beyond the top speed likewise."""
+    """Behaviour: a plateau a biased pressure sensor reads beyond the pump's input envelope (31 bar on a 27.5 bar
+    pump, whose inputs are run up to 10 % above its rated range, ``records.RANGE_MARGIN``) is left out of the fit
+    with one reason naming the field, value and range — not a traceback from the steady run — and the plateaus
+    inside are kept (27.64 bar, just above the rated pressure, among them); a shaft speed beyond it likewise."""
     import math
 
     from gerotor_twin.calibration.plateaus import PlateauRecord, split_by_envelope
@@ -193,8 +194,9 @@ def test_plateaus_outside_the_envelope_are_named_and_left_out():
     p_atm = cfg.fluid.atmospheric_pa
     rec = lambda i, rpm, bar: PlateauRecord("b.mcap", i, 0.0, 1.0, rpm * math.pi / 30, p_atm + bar * 1e5,  # noqa: E731
                                             float("nan"), 50.0, 1e-4, 1e-7, 10)
-    kept, out = split_by_envelope([rec(1, 1000, 10.0), rec(2, 2000, 27.64), rec(3, 3100, 5.0)], cfg)
-    assert [r.index for r in kept] == [1] and [r.index for r, _ in out] == [2, 3]
+    kept, out = split_by_envelope([rec(1, 1000, 10.0), rec(2, 2000, 31.0), rec(3, 3400, 5.0), rec(4, 2000, 27.64)],
+                                  cfg)
+    assert [r.index for r in kept] == [1, 4] and [r.index for r, _ in out] == [2, 3]
     assert "delivery_pressure" in out[0][1] and "27.5 bar" in out[0][1]
     assert "shaft_speed" in out[1][1] and "3000 rpm" in out[1][1]
 

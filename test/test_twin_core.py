@@ -197,6 +197,26 @@ def test_bad_values_rejected_previous_held(model, kind, value, reason):
     encode(m.DIAGNOSTIC_ARRAY, diag)
 
 
+@pytest.mark.parametrize("kind", ["shaft_speed", "delivery_pressure"])
+def test_a_bench_at_its_rated_point_is_followed_above_it(model, kind):
+    """Behaviour: a bench held at the pump's rated speed or delivery pressure reads above it with every noisy
+    sample; those are run, up to ``RANGE_MARGIN`` (10 %) beyond the rated range, and refused beyond, naming the
+    widened range."""
+    from gerotor_twin.model.records import RANGE_MARGIN
+    rng, p_atm = model.config.range, model.config.fluid.atmospheric_pa
+    rated = rng.max_speed_rpm * math.pi / 30 if kind == "shaft_speed" else rng.max_delivery_bar * 1e5
+    value = (lambda x: x) if kind == "shaft_speed" else (lambda x: p_atm + x)
+    core = TwinCore(model, TwinSettings(error_report_period_s=1.0))
+    run(core, 0, 100)
+    assert core.add_sample(kind, value(1.05 * rated), None, 100 * MS) is True
+    assert core.input_report(100 * MS)[kind]["value"] == pytest.approx(value(1.05 * rated))
+    no_nan(run(core, 100, 200))
+    assert not any(core.input_report(200 * MS)[kind]["rejected"].values())
+    assert core.add_sample(kind, value((1.0 + 1.01 * RANGE_MARGIN) * rated), None, 200 * MS) is False
+    rep = core.input_report(200 * MS)[kind]
+    assert rep["rejected"]["out_of_range"] == 1 and "+ 10 %" in rep["last_error"]
+
+
 def test_small_negative_speed_clamped(model):
     core = TwinCore(model)
     assert core.add_sample("shaft_speed", -0.1, None, 0)
