@@ -62,6 +62,19 @@ def test_budget_has_the_four_figures_and_judges_each():
         assert not within_budget({**row, k: -1.01 * v})
 
 
+def test_flow_scale_note_restates_the_flow_figures_where_the_mean_flow_vanishes():
+    """Closed form: where the reference delivers less than half its theoretical flow the line restates the η and
+    flow figures (relative to the mean flow) on the theoretical flow, each times |η_ref|: a worn pump at low speed
+    and high pressure delivering −7.9 % reads a flow RMS of 17.27 % of its mean flow, 1.36 % of the theoretical;
+    a pump delivering 90 % gets no line."""
+    from gerotor_twin.model.accuracy import SMALL_EFFICIENCY, flow_scale_note
+    row = {"reference_volumetric_efficiency": -0.079, "efficiency_error": 0.00474, "flow_rms_error": 0.1727}
+    note = flow_scale_note(row)
+    assert "-7.9%" in note and "flow RMS 1.36%" in note and "η +0.037 pt" in note
+    assert flow_scale_note({**row, "reference_volumetric_efficiency": 0.9}) is None
+    assert flow_scale_note({**row, "reference_volumetric_efficiency": SMALL_EFFICIENCY}) is None
+
+
 def test_family_grid_follows_each_pumps_range():
     """Behaviour: every pump of config/pumps/ is found; its grid spans its own range (speeds low / middle /
     top, pressures low / top), the low speed being ``min_speed_rpm`` where given."""

@@ -54,7 +54,8 @@ from .steady import reference_config, run_steady
 from ..units import bar_gauge_to_pa_abs, rpm_to_rad_s
 
 __all__ = ["accuracy", "compare", "coupled_comparison", "coupled_key_config", "Revolution", "reference_revolution",
-           "print_accuracy", "within_budget", "reference_numerics", "reference_check", "BUDGET"]
+           "print_accuracy", "within_budget", "reference_numerics", "reference_check", "BUDGET", "flow_scale_note",
+           "SMALL_EFFICIENCY"]
 
 #: The error budget of the default numerics, one for every pump: RMS chamber-pressure error ≤ 1 % of the
 #: reference waveform's range, |peak error| ≤ 2 % of the reference peak (gauge), |η error| ≤ 0.3 % relative,
@@ -284,6 +285,23 @@ def reference_check(cfg, rpm: float, bar: float, model: str = "mobility",
     return {k: abs(err[k]) / v for k, v in BUDGET.items()}
 
 
+#: below this |η| of the reference [-] :func:`print_accuracy` restates the flow figures on the theoretical flow
+SMALL_EFFICIENCY = 0.5
+
+
+def flow_scale_note(row: dict) -> str | None:
+    """A line for a point whose reference delivers less than :data:`SMALL_EFFICIENCY` of its theoretical flow
+    (low speed, high pressure, worn gaps), else None: the budget's η and flow figures are relative to the mean
+    flow, which goes to zero there, so the line restates them on the theoretical flow (the same errors times
+    |η_ref|)."""
+    eta = row["reference_volumetric_efficiency"]
+    if abs(eta) >= SMALL_EFFICIENCY:
+        return None
+    return (f"    note: the reference delivers η = {eta:.1%} of the theoretical flow, so the η and flow figures above, "
+            f"relative to its mean flow, are large by 1/|η|; of the theoretical flow: η "
+            f"{100 * row['efficiency_error'] * abs(eta):+.3f} pt, flow RMS {row['flow_rms_error'] * abs(eta):.2%}")
+
+
 def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=print,
                    check_reference: bool = False, label: str = "", cache=None, coupled: bool = False) -> list[dict]:
     """Run :func:`accuracy` over a grid of points and print one line each, budget verdict included.
@@ -326,6 +344,8 @@ def print_accuracy(cfg, rpms=(3000.0,), bars=(27.5,), models=("mobility",), out=
                     f"{r['sampled_peak_error']:+8.2%} {r['peak_numerics_error']:+8.2%} {r['peak_sampling_error']:+8.2%} "
                     f"{r['efficiency_error']:+8.3%} {r['flow_rms_error']:8.2%} {r['substeps_per_revolution']:7.0f}"
                     f"{chk}  {'ok' if r['within_budget'] else 'OUTSIDE BUDGET'}")
+                if (note := flow_scale_note(r)) is not None:
+                    out(note)
                 if "coupled" in r:
                     c = r["coupled"]
                     out(f"    against the coupled reference (pressures and gear position together, Radau): RMS "
