@@ -86,7 +86,7 @@ def test_cli_simulate_json(tmp_path):
 
 
 @pytest.mark.parametrize("args,needle", [
-    (("simulate", "--rpm", "5000", "--bar", "10"), "--rpm = 5000.0 is invalid; allowed: (0, 3000] rpm"),
+    (("simulate", "--rpm", "5000", "--bar", "10"), "--rpm = 5000.0 is invalid; allowed: (0, 3300] rpm (the rated 3000 rpm + 10 %)"),
     (("simulate", "--rpm", "1000", "--bar", "40"), "--bar = 40.0 is invalid"),
     (("simulate", "--rpm", "nan", "--bar", "10"), "--rpm"),
     (("geometry", "--config", "/nonexistent.yaml"), "file not found"),
@@ -108,7 +108,7 @@ def test_cli_user_error_from_the_shell():
     """Behaviour: the same from ``python -m gerotor_twin``: exit status 2, the field named, no traceback."""
     p = run_cli("simulate", "--rpm", "5000", "--bar", "10")
     assert p.returncode == 2
-    assert "--rpm = 5000.0 is invalid; allowed: (0, 3000] rpm" in p.stderr
+    assert "--rpm = 5000.0 is invalid; allowed: (0, 3300] rpm (the rated 3000 rpm + 10 %)" in p.stderr
     assert "Traceback" not in p.stderr
 
 

@@ -10,6 +10,7 @@ from ..config import Numerics
 from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
+from .records import RANGE_MARGIN
 from .volumetric import EdgeLosses
 
 #: The defaults of the settings the log-density measure does not read (:func:`reference_config`).
@@ -111,6 +112,15 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, m
                                          max_substep_attempts=1_000_000))
 
 
+def _allowed_point(rng) -> dict:
+    """The allowed speed and delivery pressure of a steady run, as its errors name them: the model's input envelope,
+    the pump's rated range widened by :data:`.records.RANGE_MARGIN`."""
+    grow = 1.0 + RANGE_MARGIN
+    more = f"the rated {{}} + {100 * RANGE_MARGIN:g} %"
+    return {"--rpm": f"(0, {grow * rng.max_speed_rpm:g}] rpm ({more.format(f'{rng.max_speed_rpm:g} rpm')})",
+            "--bar": f"[0, {grow * rng.max_delivery_bar:g}] bar ({more.format(f'{rng.max_delivery_bar:g} bar')})"}
+
+
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
                rtol: float = 2e-4, p_suction: float | None = None, progress=None,
                state: PumpState | None = None, etol: float = 2e-3,
@@ -137,10 +147,11 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     oil_temperature : float, optional
         Oil temperature [K] (default: the config's reference temperature).
     """
+    allowed = _allowed_point(model.config.range)
     if not (math.isfinite(rpm) and rpm > 0):
-        raise InputError("--rpm", rpm, f"(0, {model.config.range.max_speed_rpm:g}] rpm")
+        raise InputError("--rpm", rpm, allowed["--rpm"])
     if not math.isfinite(bar):
-        raise InputError("--bar", bar, f"[0, {model.config.range.max_delivery_bar:g}] bar")
+        raise InputError("--bar", bar, allowed["--bar"])
     p_atm = model.config.fluid.atmospheric_pa
     ps = model.config.boundary.suction_pressure_pa if p_suction is None else p_suction
     inputs = Inputs(rpm_to_rad_s(rpm), ps, bar_gauge_to_pa_abs(bar, p_atm), oil_temperature)
@@ -149,11 +160,8 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     except InputError as exc:
         name = {"shaft_speed": "--rpm", "delivery_pressure": "--bar",
                 "oil_temperature": "--oil-temp"}.get(exc.field, exc.field)
-        rng = model.config.range
-        allowed = {"--rpm": f"(0, {rng.max_speed_rpm:g}] rpm",
-                   "--bar": f"[0, {rng.max_delivery_bar:g}] bar"}.get(name, exc.allowed)
         value = {"--rpm": rpm, "--bar": bar}.get(name, exc.value)
-        raise InputError(name, value, allowed) from None
+        raise InputError(name, value, allowed.get(name, exc.allowed)) from None
     period = 2 * math.pi / inputs.omega
     state = model.initial_state(inputs) if state is None else state
     c = model.config.clearances.housing_radial_m
