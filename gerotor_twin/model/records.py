@@ -87,8 +87,9 @@ class Outputs:
     chamber_pressures: np.ndarray   #: (n, N) [Pa]
     chamber_peak_pressures: np.ndarray  #: (n, N) each chamber's highest pressure over the step ending at row i [Pa]
     delivery_pressure: np.ndarray   #: [Pa]
-    delivery_flow: np.ndarray       #: net flow out of the delivery port at the step's end, from the stepper's stages [m³/s]
-    #: (:func:`.kernel._delivery_flow`: the rate of the delivered volume, docs/numerics.md)
+    #: net flow out of the delivery port at the step's end: the rate of the delivered volume from the stepper's stages
+    #: (:func:`.kernel._delivery_flow`, docs/numerics.md) [m³/s]
+    delivery_flow: np.ndarray
     suction_flow: np.ndarray        #: flow in through the suction port [m³/s]
     leak_suction_delivery: np.ndarray  #: [m³/s]
     leak_drain: np.ndarray          #: [m³/s]
@@ -130,7 +131,8 @@ class Outputs:
 
 #: Share beyond the rated range (``range.max_speed_rpm``, ``range.max_delivery_bar``) within which an input is run
 #: [-]: a bench held at its rated point reads above it with every noisy sample, ripple or pressure overshoot, and
-#: refusing those would hold the last sample below the limit (a biased input, half the samples counted as errors).
+#: refusing those would hold the last sample below the limit (a biased input, 42 % of the samples counted as errors
+#: at 27.5 bar ± 2 kPa, docs/node.md).
 #: Nothing in the model is tabulated against the range; the error budget is measured at its ends
 #: (docs/numerics.md, "The pump family").  Beyond the margin an input is refused.
 RANGE_MARGIN = 0.1
