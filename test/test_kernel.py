@@ -337,7 +337,8 @@ def test_delivery_flow_keeps_the_line_mass_balance_in_restriction_mode(cfg):
     apart (default pump, mobility, 2000 rpm, 2e-5 m² to atmosphere, 2026-12-07).  Sampled from the right-hand side
     at each output step's end it was 1.1e-3 apart: the chambers open to the delivery port carry their pressure
     error into it multiplied by the port's conductance (docs/numerics.md, "The delivery flow at the output
-    points")."""
+    points"); so was the delivered volume (η), the trapezoid of those samples, until it was taken from the line's
+    state: its volume times the change of its ln ρ plus the restriction's outflow."""
     from dataclasses import replace
     c = replace(cfg, boundary=replace(cfg.boundary, mode="restriction"))
     m = PumpModel(c, "mobility")
@@ -347,6 +348,8 @@ def test_delivery_flow_keeps_the_line_mass_balance_in_restriction_mode(cfg):
     s, o = m.advance(s, period, inp)
     assert o.delivery_pressure.mean() > P_ATM + 5e5                      # the restriction holds a pressure
     assert o.delivery_flow.mean() == pytest.approx(o.restriction_flow.mean(), rel=2e-4)
+    # and the delivered volume (η) is what the line stored and passed on, not the trapezoid of the samples (1.1e-3)
+    assert o.volumetric_efficiency * o.theoretical_flow == pytest.approx(o.restriction_flow.mean(), rel=2e-4)
 
 
 def test_jacobian_matches_finite_differences_in_the_mixture_at_low_pressure(warm):

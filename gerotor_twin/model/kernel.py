@@ -206,7 +206,7 @@ def _first_stage(y, th, km, op, ws, integrals, big_h):
     if h > 0.0:
         _track_peak(y, h, km.pc.n, ws)
     for i in range(ws.flows.shape[0]):
-        if h > 0.0 and not (i == FL_DELIVERY and not km.pc.restriction):
+        if h > 0.0 and i != FL_DELIVERY:          # the delivered volume: integrate's, from the stages
             integrals[i] += 0.5 * h * (ws.flows_prev[i] + ws.flows[i])
         ws.flows_prev[i] = ws.flows[i]
     ws.ctrl[CT_PENDING] = 0.0
@@ -481,9 +481,10 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     Writes one record per step into ``rec`` (N_REC columns), ``rec_p`` (chamber
     pressures), ``rec_peak`` (each chamber's highest pressure over the step, from
     the sub-steps: :func:`_track_peak`) and ``rec_gap`` (gap heights); ``integrals`` accumulates
-    ∫ flow dt [m³] per ``FL_*`` index: the delivered volume (imposed delivery pressure)
-    with the Rosenbrock stages themselves, consistent with the chambers' mass balance;
-    the others by the trapezoid over every accepted ROS2 sub-step.
+    ∫ flow dt [m³] per ``FL_*`` index: the delivered volume with the Rosenbrock stages themselves, consistent
+    with the chambers' mass balance (imposed delivery pressure: their quadrature; restriction mode: the line's
+    volume times the change of its ln ρ, plus what left through the restriction); the others by the trapezoid over
+    every accepted ROS2 sub-step.
     ``move``: MOVE_FIXED (the centre stays where it is), MOVE_MOBILITY (Heun
     steps of the mobility method, sec. 2.2 of [1]) or MOVE_EXTERNAL (held here,
     moved by the caller: :func:`integrate_external`).
@@ -519,6 +520,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
     for n in range(n_steps):
         if not pc.restriction:
             y[pc.n] = 0.0                          # ∫ Q_delivered dt over this step (flows.assemble)
+        line0 = y[pc.n]                            # restriction mode: the line's ln ρ and what left it so far
+        restricted0 = integrals[FL_RESTRICTION]
         status = pressure_step(y, theta, h, ex, ey, km, op, ws, counters, integrals)
         if status != STEP_DONE:
             ws.ctrl[CT_STATUS] = status            # the caller reports it (PumpModel.advance: SolverFailure)
@@ -559,6 +562,8 @@ def integrate(y, e, theta, t, n_steps, h, km, op, ws, rec, rec_p, rec_peak, rec_
                 ws.ctrl[CT_CMAT_END] = 1.0
             _first_substep_rates(ex, ey, theta, h, km, op, ws)
         _first_stage(y, theta, km, op, ws, integrals, h)   # end-of-step flows (recorded, but the delivery's) = next first stage
+        if pc.restriction:                         # delivered = stored in the line + gone through the restriction
+            integrals[FL_DELIVERY] += pc.line_volume * (y[pc.n] - line0) + integrals[FL_RESTRICTION] - restricted0
         counters[C_STEPS] += 1
         _record(rec, rec_p, rec_peak, rec_gap, n, t, theta, ex, ey, fx, fy, gam, kc, ws, _delivery_flow(pc, ws))
     e[0] = ex
