@@ -16,7 +16,7 @@ from ..units import bar_gauge_to_pa_abs, kelvin_to_celsius, rpm_to_rad_s
 from . import kernel as K
 from .params import N_FLOWS
 
-__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs", "check_oil_temperature", "RANGE_MARGIN"]
+__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs", "check_oil_temperature", "RANGE_MARGIN", "widened"]
 
 
 @dataclass(frozen=True)
@@ -138,27 +138,32 @@ class Outputs:
 RANGE_MARGIN = 0.1
 
 
+def widened(rated: float, unit: str) -> tuple[float, str]:
+    """The input envelope's limit for a ``rated`` maximum in ``unit`` (rpm, bar gauge), and how an error names it:
+    (rated·(1 + :data:`RANGE_MARGIN`), "the rated … + 10 %")."""
+    return rated * (1.0 + RANGE_MARGIN), f"the rated {rated:g} {unit} + {100 * RANGE_MARGIN:g} %"
+
+
 def check_inputs(config: PumpConfig, inputs: Inputs) -> Inputs:
     """``inputs`` checked against the envelope of ``config``: speed in [0, max], suction pressure in
     [0.1, 5] bar absolute, delivery pressure from 0.5 bar below the suction pressure to the range's (imposed mode),
     the maxima of speed and delivery pressure (gauge) widened by :data:`RANGE_MARGIN` [rad/s, Pa]; raise
     :class:`InputError` naming the field, value and allowed range."""
     rng, p_atm = config.range, config.fluid.atmospheric_pa
-    grow = 1.0 + RANGE_MARGIN
     w = check_finite("shaft_speed", inputs.omega)
-    wmax = rpm_to_rad_s(rng.max_speed_rpm) * grow
+    rpm_max, rpm_text = widened(rng.max_speed_rpm, "rpm")
+    wmax = rpm_to_rad_s(rpm_max)
     if not 0.0 <= w <= wmax:
-        raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{grow * rng.max_speed_rpm:g} rpm: the rated "
-                                           f"{rng.max_speed_rpm:g} rpm + {100 * RANGE_MARGIN:g} %)")
+        raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{rpm_max:g} rpm: {rpm_text})")
     ps = check_finite("suction_pressure", inputs.p_suction)
     if not 1e4 <= ps <= 5e5:
         raise InputError("suction_pressure", ps, "[10000, 500000] Pa absolute")
     pd = check_finite("delivery_pressure", inputs.p_delivery)
-    pmax = bar_gauge_to_pa_abs(rng.max_delivery_bar * grow, p_atm)
+    bar_max, bar_text = widened(rng.max_delivery_bar, "bar")
+    pmax = bar_gauge_to_pa_abs(bar_max, p_atm)
     if not (config.boundary.mode == "restriction" or ps - 0.5e5 <= pd <= pmax):
         raise InputError("delivery_pressure", pd,
-                         f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (up to {grow * rng.max_delivery_bar:g} bar gauge: "
-                         f"the rated {rng.max_delivery_bar:g} bar + {100 * RANGE_MARGIN:g} %)")
+                         f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (up to {bar_max:g} bar gauge: {bar_text})")
     return Inputs(w, ps, pd, check_oil_temperature(inputs.oil_temperature))
 
 

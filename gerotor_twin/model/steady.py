@@ -10,7 +10,7 @@ from ..config import Numerics
 from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
-from .records import RANGE_MARGIN
+from .records import widened
 from .volumetric import EdgeLosses
 
 #: The defaults of the settings the log-density measure does not read (:func:`reference_config`).
@@ -114,11 +114,10 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, m
 
 def _allowed_point(rng) -> dict:
     """The allowed speed and delivery pressure of a steady run, as its errors name them: the model's input envelope,
-    the pump's rated range widened by :data:`.records.RANGE_MARGIN`."""
-    grow = 1.0 + RANGE_MARGIN
-    more = f"the rated {{}} + {100 * RANGE_MARGIN:g} %"
-    return {"--rpm": f"(0, {grow * rng.max_speed_rpm:g}] rpm ({more.format(f'{rng.max_speed_rpm:g} rpm')})",
-            "--bar": f"[0, {grow * rng.max_delivery_bar:g}] bar ({more.format(f'{rng.max_delivery_bar:g} bar')})"}
+    the pump's rated range widened by :data:`.records.RANGE_MARGIN` (:func:`.records.widened`)."""
+    rpm_max, rpm_text = widened(rng.max_speed_rpm, "rpm")
+    bar_max, bar_text = widened(rng.max_delivery_bar, "bar")
+    return {"--rpm": f"(0, {rpm_max:g}] rpm ({rpm_text})", "--bar": f"[0, {bar_max:g}] bar ({bar_text})"}
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
