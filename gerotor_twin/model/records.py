@@ -16,7 +16,7 @@ from ..units import bar_gauge_to_pa_abs, kelvin_to_celsius, rpm_to_rad_s
 from . import kernel as K
 from .params import N_FLOWS
 
-__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs", "check_oil_temperature", "RANGE_MARGIN", "widened"]
+__all__ = ["Inputs", "PumpState", "Outputs", "check_inputs", "check_oil_temperature", "RANGE_MARGIN", "widened", "widened_text"]
 
 
 @dataclass(frozen=True)
@@ -138,10 +138,14 @@ class Outputs:
 RANGE_MARGIN = 0.1
 
 
-def widened(rated: float, unit: str) -> tuple[float, str]:
-    """The input envelope's limit for a ``rated`` maximum in ``unit`` (rpm, bar gauge), and how an error names it:
-    (rated·(1 + :data:`RANGE_MARGIN`), "the rated … + 10 %")."""
-    return rated * (1.0 + RANGE_MARGIN), f"the rated {rated:g} {unit} + {100 * RANGE_MARGIN:g} %"
+def widened(rated: float) -> float:
+    """The input envelope's limit for a ``rated`` maximum (rpm, bar gauge): rated·(1 + :data:`RANGE_MARGIN`)."""
+    return rated * (1.0 + RANGE_MARGIN)
+
+
+def widened_text(rated: float, unit: str) -> str:
+    """How an error names that limit: "0–… unit: the rated … unit + 10 %" (built only for an error)."""
+    return f"the rated {rated:g} {unit} + {100 * RANGE_MARGIN:g} %"
 
 
 def check_inputs(config: PumpConfig, inputs: Inputs) -> Inputs:
@@ -151,19 +155,18 @@ def check_inputs(config: PumpConfig, inputs: Inputs) -> Inputs:
     :class:`InputError` naming the field, value and allowed range."""
     rng, p_atm = config.range, config.fluid.atmospheric_pa
     w = check_finite("shaft_speed", inputs.omega)
-    rpm_max, rpm_text = widened(rng.max_speed_rpm, "rpm")
-    wmax = rpm_to_rad_s(rpm_max)
+    wmax = rpm_to_rad_s(widened(rng.max_speed_rpm))
     if not 0.0 <= w <= wmax:
-        raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{rpm_max:g} rpm: {rpm_text})")
+        raise InputError("shaft_speed", w, f"[0, {wmax:.4g}] rad/s (0–{widened(rng.max_speed_rpm):g} rpm: "
+                                           f"{widened_text(rng.max_speed_rpm, 'rpm')})")
     ps = check_finite("suction_pressure", inputs.p_suction)
     if not 1e4 <= ps <= 5e5:
         raise InputError("suction_pressure", ps, "[10000, 500000] Pa absolute")
     pd = check_finite("delivery_pressure", inputs.p_delivery)
-    bar_max, bar_text = widened(rng.max_delivery_bar, "bar")
-    pmax = bar_gauge_to_pa_abs(bar_max, p_atm)
+    pmax = bar_gauge_to_pa_abs(widened(rng.max_delivery_bar), p_atm)
     if not (config.boundary.mode == "restriction" or ps - 0.5e5 <= pd <= pmax):
-        raise InputError("delivery_pressure", pd,
-                         f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (up to {bar_max:g} bar gauge: {bar_text})")
+        raise InputError("delivery_pressure", pd, f"[{ps - 0.5e5:.6g}, {pmax:.6g}] Pa absolute (up to "
+                         f"{widened(rng.max_delivery_bar):g} bar gauge: {widened_text(rng.max_delivery_bar, 'bar')})")
     return Inputs(w, ps, pd, check_oil_temperature(inputs.oil_temperature))
 
 

@@ -10,7 +10,7 @@ from ..config import Numerics
 from ..errors import InputError
 from ..units import P_ATM, bar_gauge_to_pa_abs, rpm_to_rad_s
 from .pump import Inputs, Outputs, PumpModel, PumpState
-from .records import widened
+from .records import widened, widened_text
 from .volumetric import EdgeLosses
 
 #: The defaults of the settings the log-density measure does not read (:func:`reference_config`).
@@ -115,9 +115,8 @@ def reference_config(cfg, tolerance: float = 2e-7, max_step_deg: float = 0.25, m
 def _allowed_point(rng) -> dict:
     """The allowed speed and delivery pressure of a steady run, as its errors name them: the model's input envelope,
     the pump's rated range widened by :data:`.records.RANGE_MARGIN` (:func:`.records.widened`)."""
-    rpm_max, rpm_text = widened(rng.max_speed_rpm, "rpm")
-    bar_max, bar_text = widened(rng.max_delivery_bar, "bar")
-    return {"--rpm": f"(0, {rpm_max:g}] rpm ({rpm_text})", "--bar": f"[0, {bar_max:g}] bar ({bar_text})"}
+    return {"--rpm": f"(0, {widened(rng.max_speed_rpm):g}] rpm ({widened_text(rng.max_speed_rpm, 'rpm')})",
+            "--bar": f"[0, {widened(rng.max_delivery_bar):g}] bar ({widened_text(rng.max_delivery_bar, 'bar')})"}
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
@@ -146,11 +145,10 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     oil_temperature : float, optional
         Oil temperature [K] (default: the config's reference temperature).
     """
-    allowed = _allowed_point(model.config.range)
     if not (math.isfinite(rpm) and rpm > 0):
-        raise InputError("--rpm", rpm, allowed["--rpm"])
+        raise InputError("--rpm", rpm, _allowed_point(model.config.range)["--rpm"])
     if not math.isfinite(bar):
-        raise InputError("--bar", bar, allowed["--bar"])
+        raise InputError("--bar", bar, _allowed_point(model.config.range)["--bar"])
     p_atm = model.config.fluid.atmospheric_pa
     ps = model.config.boundary.suction_pressure_pa if p_suction is None else p_suction
     inputs = Inputs(rpm_to_rad_s(rpm), ps, bar_gauge_to_pa_abs(bar, p_atm), oil_temperature)
@@ -160,7 +158,7 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
         name = {"shaft_speed": "--rpm", "delivery_pressure": "--bar",
                 "oil_temperature": "--oil-temp"}.get(exc.field, exc.field)
         value = {"--rpm": rpm, "--bar": bar}.get(name, exc.value)
-        raise InputError(name, value, allowed.get(name, exc.allowed)) from None
+        raise InputError(name, value, _allowed_point(model.config.range).get(name, exc.allowed)) from None
     period = 2 * math.pi / inputs.omega
     state = model.initial_state(inputs) if state is None else state
     c = model.config.clearances.housing_radial_m
