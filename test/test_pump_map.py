@@ -4,6 +4,7 @@ Tiers: unit conversions against closed forms; bad input (one line per bad row na
 and allowed range); the shipped example parses; closed form (synthetic truth): a map made by the twin at
 known clearances and a known displacement deficit is recovered within its interval.
 """
+import dataclasses
 import math
 
 import pytest
@@ -41,6 +42,49 @@ def test_units_closed_form(tmp_path):
     assert b.p_delivery_pa == pytest.approx(P_ATM + 2e6) and b.p_suction_pa == pytest.approx(0.9e5)
 
 
+def test_us_units_closed_form(tmp_path):
+    """Closed form: a US catalogue's units. 4 gpm = 4 × 3.785411784 L/min (the US gallon, 231 in³);
+    122 °F = 50 °C and 212 °F = 100 °C ((F − 32)·5/9); 400 psi gauge = p_atm + 400 × 6894.757293168 Pa;
+    a suction column at 14.7 psia = 14.7 × 6894.757293168 Pa absolute."""
+    a, b = read_map(_write(tmp_path, "speed [rpm],p_delivery [psi],T_oil [degF],Q [gpm],p_suction [psia]\n"
+                                     "1200,400,122,4,14.7\n1800,250,212,6,14.7\n"), LIMITS)
+    assert a.flow_m3s == pytest.approx(4 * 3.785411784e-3 / 60, rel=1e-12)
+    assert a.oil_temperature_c == pytest.approx(50.0) and b.oil_temperature_c == pytest.approx(100.0)
+    assert a.p_delivery_pa == pytest.approx(P_ATM + 400 * 6894.757293168)
+    assert a.p_suction_pa == pytest.approx(14.7 * 6894.757293168)
+
+
+def test_semicolons_tabs_and_decimal_commas(tmp_path):
+    """Behaviour: a map saved by a spreadsheet where the comma is the decimal sign (cells separated by
+    semicolons, or by tabs, numbers with a decimal comma) reads as the same map with commas and points;
+    a bad cell there is named as in any map."""
+    rows = [("1000", "12.5", "40", "17.25"), ("2000", "5", "60.5", "39")]
+    plain = read_map(_write(tmp_path, "speed [rpm],p_delivery [bar],T_oil [degC],Q [l/min]\n"
+                            + "".join(",".join(r) + "\n" for r in rows)), LIMITS)
+    for sep in (";", "\t"):
+        text = sep.join(["speed [rpm]", "p_delivery [bar]", "T_oil [degC]", "Q [l/min]"]) + "\n" + "".join(
+            sep.join(c.replace(".", ",") for c in r) + "\n" for r in rows)
+        assert read_map(_write(tmp_path, text, "eu.csv"), LIMITS) == [
+            dataclasses.replace(r, bag=str(tmp_path / "eu.csv")) for r in plain]
+    with pytest.raises(PumpMapError) as exc:
+        read_map(_write(tmp_path, "speed [rpm];p_delivery [bar];T_oil [degC];Q [l/min]\n1000;1.234,5;40;17\n"),
+                 LIMITS)
+    assert "row 1 (line 2): p_delivery [bar] = '1.234,5'" in exc.value.lines[0]
+
+
+def test_the_limits_are_the_models_input_envelope(tmp_path):
+    """Behaviour: a config's map limits are the twin's input envelope, its rated speed and delivery pressure
+    + 10 % (the default pump: 3000 rpm and 27.5 bar rated), and an error names them so."""
+    lim = MapLimits.from_config(load_config())
+    ok = read_map(_write(tmp_path, "speed [rpm],p_delivery [bar],T_oil [degC],eta_v [-]\n3300,30.25,50,0.9\n"), lim)
+    assert ok[0].omega == pytest.approx(3300 * math.pi / 30)
+    with pytest.raises(PumpMapError) as exc:
+        read_map(_write(tmp_path, "speed [rpm],p_delivery [bar],T_oil [degC],eta_v [-]\n"
+                                  "3400,5,50,0.9\n1000,31,50,0.9\n"), lim)
+    assert "speed [rpm] = '3400' is invalid; allowed: (0, 3300] rpm (the rated 3000 rpm + 10 %)" in exc.value.lines[0]
+    assert "p_delivery [bar] = '31' is invalid; allowed: [0, 30.25] bar (the rated 27.5 bar + 10 %)" in exc.value.lines[1]
+
+
 def test_bad_rows_one_line_each(tmp_path, capsys):
     """Bad input: each bad row is one line naming its row and line, the column, the value and the allowed
     range (in the column's unit); the good rows do not hide them; the CLI prints them and exits 2."""
@@ -67,7 +111,7 @@ def test_bad_rows_one_line_each(tmp_path, capsys):
 @pytest.mark.parametrize("header, field", [
     ("speed [rpm],p_delivery [bar],eta_v [-]", "a column t_oil"),
     ("speed [rpm],p_delivery [bar],T_oil [degC]", "exactly one of Q"),
-    ("speed [rpm],p_delivery [bar],T_oil [degF],eta_v [-]", "degc | °c | k"),
+    ("speed [rpm],p_delivery [bar],T_oil [degR],eta_v [-]", "degc | °c | k | degf | °f"),
     ("speed,p_delivery [bar],T_oil [degC],eta_v [-]", "the unit in brackets")])
 def test_bad_header(tmp_path, header, field):
     """Bad input: a missing column, a unit not listed, a column without a unit are named."""

@@ -100,7 +100,7 @@ def calibrate_bags(bags, *, config_path=None, detector: DetectorSettings = Detec
     if not records:
         raise InputError("--bench", ", ".join(map(str, bags)), "recordings with at least one steady plateau "
                          f"(≥ {detector.min_s + detector.settle_s:g} s of constant speed and pressure) inside the "
-                         "pump config's range")
+                         "pump's input envelope (its rated range + 10 %)")
     out = calibrate_records(records, [str(b) for b in bags], config_path=config_path, progress=progress,
                             **fit_options)
     out["detector"] = detector.__dict__

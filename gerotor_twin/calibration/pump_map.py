@@ -8,15 +8,22 @@ quantity (header names)     units                                required
 ==========================  ===================================  ===========================
 speed (``speed``, ``n``)    ``rpm``, ``1/min``, ``rad/s``        yes
 delivery pressure           ``bar``, ``kPa``, ``MPa``, ``Pa``,   yes (gauge; ``bar abs``,
-(``p_delivery``, ``p_d``)   ``psi``                              ``Pa abs``: absolute)
+(``p_delivery``, ``p_d``)   ``psi`` (``psig``)                   ``kPa abs``, ``MPa abs``,
+                                                                 ``Pa abs``, ``psia``: absolute)
 suction pressure            as the delivery pressure             no (default: the pump
 (``p_suction``, ``p_s``)                                         config's suction pressure)
-oil temperature             ``degC``, ``°C``, ``K``              yes
-(``T_oil``, ``oil_temperature``)
-flow (``Q``, ``flow``)      ``l/min``, ``m3/s``, ``cm3/s``       one of flow and η_v
+oil temperature             ``degC``, ``°C``, ``K``, ``degF``,   yes
+(``T_oil``, ``oil_temperature``) ``°F``
+flow (``Q``, ``flow``)      ``l/min`` (``lpm``), ``m3/s``,       one of flow and η_v
+                            ``cm3/s``, ``gpm`` (US gallons per
+                            minute, ``gal/min``)
 volumetric efficiency       ``-``, ``%``                         one of flow and η_v
 (``eta_v``, ``eta``)
 ==========================  ===================================  ===========================
+
+The cells are separated by commas, or by semicolons or tabs (a spreadsheet saved where the comma is the
+decimal sign: the separator is the header line's, and with semicolons or tabs a number may have a
+decimal comma, ``12,5``).
 
 Every value is converted to SI on reading; a volumetric efficiency becomes a flow with the
 prior config's displacement:
@@ -51,12 +58,17 @@ NAMES = {"speed": ("speed", "n", "shaft_speed"),
          "flow": ("q", "flow", "delivery_flow"),
          "eta_v": ("eta_v", "eta", "volumetric_efficiency")}
 
+_PSI = 6894.757293168          #: the pound-force per square inch [Pa]
+_GALLON = 3.785411784e-3        #: the US gallon [m³]
 _PRESSURE = {"bar": (1e5, False), "kpa": (1e3, False), "mpa": (1e6, False), "pa": (1.0, False),
-             "psi": (6894.757293168, False), "bar abs": (1e5, True), "pa abs": (1.0, True)}
+             "psi": (_PSI, False), "psig": (_PSI, False), "bar abs": (1e5, True), "kpa abs": (1e3, True),
+             "mpa abs": (1e6, True), "pa abs": (1.0, True), "psia": (_PSI, True), "psi abs": (_PSI, True)}
 #: per quantity: unit (lower case) → (scale to SI, offset added after scaling) [SI]
 UNITS = {"speed": {"rpm": (2 * math.pi / 60, 0.0), "1/min": (2 * math.pi / 60, 0.0), "rad/s": (1.0, 0.0)},
-         "t_oil": {"degc": (1.0, 0.0), "°c": (1.0, 0.0), "k": (1.0, -273.15)},
-         "flow": {"l/min": (1e-3 / 60, 0.0), "m3/s": (1.0, 0.0), "cm3/s": (1e-6, 0.0)},
+         "t_oil": {"degc": (1.0, 0.0), "°c": (1.0, 0.0), "k": (1.0, -273.15),
+                   "degf": (5.0 / 9.0, -160.0 / 9.0), "°f": (5.0 / 9.0, -160.0 / 9.0)},   # (F − 32)·5/9
+         "flow": {"l/min": (1e-3 / 60, 0.0), "lpm": (1e-3 / 60, 0.0), "m3/s": (1.0, 0.0), "cm3/s": (1e-6, 0.0),
+                  "gpm": (_GALLON / 60, 0.0), "gal/min": (_GALLON / 60, 0.0)},
          "eta_v": {"-": (1.0, 0.0), "%": (0.01, 0.0)}}
 _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*\[([^\]]*)\]\s*$")
 
@@ -74,15 +86,30 @@ class MapLimits:
     """What the pump and the model allow (SI), from the prior pump config."""
     displacement_m3: float       #: volume per revolution of the ideal profiles [m³]
     p_atm_pa: float              #: atmospheric pressure (gauge zero) [Pa]
-    max_speed_rad_s: float       #: top of the config's speed range [rad/s]
-    max_delivery_pa: float       #: top of the config's delivery range, gauge [Pa]
+    max_speed_rad_s: float       #: top of the speed range [rad/s]
+    max_delivery_pa: float       #: top of the delivery range, gauge [Pa]
     t_oil_c: tuple[float, float] = (-40.0, 200.0)   #: oil temperature allowed [°C]
     eta_max: float = 1.1         #: largest volumetric efficiency accepted (measurement scatter) [-]
+    #: the config's rated maxima (rpm, bar gauge) the two tops widen (:func:`.records.widened`); None: the tops
+    #: are the range itself
+    rated: tuple[float, float] | None = None
 
     @classmethod
     def from_config(cls, cfg) -> "MapLimits":
+        """The limits of the model's input envelope for ``cfg``: its rated speed and delivery pressure + 10 %
+        (:data:`.records.RANGE_MARGIN`), as the twin runs them (:func:`.records.check_inputs`)."""
+        from ..model.records import widened          # the kernel's module: imported only when a config is read
+        rng = cfg.range
         return cls(cfg.gears.displacement_closed_form(), cfg.fluid.atmospheric_pa,
-                   cfg.range.max_speed_rpm * 2 * math.pi / 60, cfg.range.max_delivery_bar * 1e5)
+                   widened(rng.max_speed_rpm) * 2 * math.pi / 60, widened(rng.max_delivery_bar) * 1e5,
+                   rated=(rng.max_speed_rpm, rng.max_delivery_bar))
+
+    def range_note(self, quantity: str) -> str:
+        """How an error names the top of the speed or delivery-pressure range."""
+        if self.rated is None:
+            return "the pump config's range"
+        from ..model.records import widened_text
+        return widened_text(*((self.rated[0], "rpm") if quantity == "speed" else (self.rated[1], "bar")))
 
 
 @dataclass(frozen=True)
@@ -153,7 +180,20 @@ def _bounds(q: str, lim: MapLimits, speed: float) -> tuple[float, float, bool]:
             "eta_v": (0.0, lim.eta_max, True)}[q]
 
 
-def _check(col: _Column, text: str, lim: MapLimits, speed: float) -> tuple[float, str | None]:
+def _delimiter(header: str) -> str:
+    """The cell separator of a map: the header line's semicolon or tab, else the comma."""
+    return next((d for d in (";", "\t") if d in header), ",")
+
+
+def _number(text: str, decimal_comma: bool) -> float:
+    """``text`` as a float; with ``decimal_comma`` (a file separated by semicolons or tabs) ``12,5`` is 12.5."""
+    if decimal_comma and text.count(",") == 1 and "." not in text:
+        text = text.replace(",", ".")
+    return float(text)
+
+
+def _check(col: _Column, text: str, lim: MapLimits, speed: float,
+           decimal_comma: bool = False) -> tuple[float, str | None]:
     """(SI value, None) or (NaN, the reason: allowed range in the column's unit)."""
     lo, hi, lo_open = _bounds(col.quantity, lim, speed)
     a, b = sorted((col.from_si(lo, lim.p_atm_pa), col.from_si(hi, lim.p_atm_pa)))
@@ -161,9 +201,9 @@ def _check(col: _Column, text: str, lim: MapLimits, speed: float) -> tuple[float
     if col.quantity == "flow":
         allowed += f" (up to η_v {lim.eta_max:g} at this speed)"
     elif col.quantity in ("speed", "p_delivery"):
-        allowed += " (the pump config's range)"
+        allowed += f" ({lim.range_note(col.quantity)})"
     try:
-        v = float(text)
+        v = _number(text, decimal_comma)
     except ValueError:
         return math.nan, f"a number in {allowed}"
     x = col.si(v, lim.p_atm_pa)
@@ -171,14 +211,15 @@ def _check(col: _Column, text: str, lim: MapLimits, speed: float) -> tuple[float
     return (x, None) if ok else (math.nan, allowed)
 
 
-def _row(path: Path, row: int, line: int, cells: list[str], cols: dict[str, _Column], lim: MapLimits):
+def _row(path: Path, row: int, line: int, cells: list[str], cols: dict[str, _Column], lim: MapLimits,
+         decimal_comma: bool = False):
     """(PlateauRecord, None) or (None, the one-line complaint)."""
     order = ["speed"] + [q for q in ("p_delivery", "p_suction", "t_oil", "flow", "eta_v") if q in cols]
     vals = {}
     for q in order:
         c = cols[q]
         text = cells[c.index].strip() if c.index < len(cells) else ""
-        x, bad = _check(c, text, lim, vals.get("speed", math.nan))
+        x, bad = _check(c, text, lim, vals.get("speed", math.nan), decimal_comma)
         if bad is not None:
             return None, str(InputError(f"{path.name} row {row} (line {line}): {c.header}", clip(text, 40), bad))
         vals[q] = x
@@ -211,11 +252,12 @@ def read_map(path, limits: MapLimits) -> list[PlateauRecord]:
     numbered = [(k + 1, s) for k, s in enumerate(lines) if s.strip() and not s.lstrip().startswith("#")]
     if not numbered:
         raise InputError(str(path), "an empty file", "a header line and one row per operating point")
-    parsed = list(csv.reader([s for _, s in numbered]))
+    sep = _delimiter(numbered[0][1])
+    parsed = list(csv.reader([s for _, s in numbered], delimiter=sep))
     cols = _columns(path, parsed[0])
     records, bad = [], []
     for row, ((line, _), cells) in enumerate(zip(numbered[1:], parsed[1:]), start=1):
-        rec, why = _row(path, row, line, cells, cols, limits)
+        rec, why = _row(path, row, line, cells, cols, limits, sep != ",")
         (bad.append(why) if why else records.append(rec))
     if bad:
         raise PumpMapError(bad)
