@@ -227,8 +227,11 @@ def laminar_turbulent_flow(dp, area, cd, delta, rho, mu):
     Q = K√Δp), the series law Δp = Q/G + Q²/K² gives
 
     .. math::
-        Q = \frac{2|\Delta p|}{1/G + \sqrt{1/G^2 + 4|\Delta p|/K^2}},\qquad
-        \frac{dQ}{d\Delta p} = \frac{1}{1/G + 2Q/K^2}.
+        Q = \frac{2|\Delta p|}{1/G + s},\qquad
+        \frac{dQ}{d\Delta p} = \frac{1}{1/G + 2Q/K^2} = \frac{1}{s},\qquad
+        s = \sqrt{1/G^2 + 4|\Delta p|/K^2}
+
+    (2Q/K² = s − 1/G, since (s − 1/G)(s + 1/G) = 4|Δp|/K²: one division less).
 
     Its discharge coefficient Q/(A√(2Δp/ρ)) tends to δ√Re (Re on the mean orifice
     velocity) for Re ≪ Re_t = (Cd/δ)² and to Cd for Re ≫ Re_t.
@@ -237,13 +240,13 @@ def laminar_turbulent_flow(dp, area, cd, delta, rho, mu):
         return 0.0, 0.0
     r = rho if rho > _RHO_MIN else _RHO_MIN
     m = mu if mu > _MU_MIN else _MU_MIN
-    d_h = math.sqrt(4.0 * area / math.pi)
-    inv_g = m / (2.0 * delta * delta * d_h * area)
-    k2 = cd * cd * area * area * 2.0 / r
+    inv_a = 1.0 / area
+    inv_g = m * inv_a * math.sqrt(0.25 * math.pi * inv_a) * (0.5 / (delta * delta))   # 1/G, 1/D_h = √(π/4A)
+    inv_k2 = r * inv_a * inv_a * (0.5 / (cd * cd))                                     # 1/K²
     adp = abs(dp)
-    q = 2.0 * adp / (inv_g + math.sqrt(inv_g * inv_g + 4.0 * adp / k2))
-    dq = 1.0 / (inv_g + 2.0 * q / k2)
-    return (q if dp >= 0.0 else -q), dq
+    s = math.sqrt(inv_g * inv_g + 4.0 * adp * inv_k2)
+    q = 2.0 * adp / (inv_g + s)
+    return (q if dp >= 0.0 else -q), 1.0 / s
 
 
 @njit(forceinline=True)     # five sites in the stepper: compiled once, inlined by LLVM

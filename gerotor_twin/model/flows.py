@@ -185,23 +185,25 @@ def port_flows(km, op, ws, jac, want_jac):
     n = pc.n
     p, beta, rho, acc, geo, fl = ws.p, ws.beta, ws.rho, ws.acc, ws.geo, ws.flows
     for j in range(n):
-        q, dq = port_orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.orifice_law, pc.cd_max, pc.lambda_crit,
-                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
-        r = op.rho_s / rho[j] if q > 0.0 else 1.0       # the suction port is a source at p_s, not a state
-        acc[j] += r * q
-        fl[FL_SUCTION] += q
-        fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
-        if want_jac:
-            jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
-            jac[j, n + 1] += r * area_derivative(q, dq, op.p_s - p[j], geo[j, G_AS]) * geo[j, G_DAS]
-        dp = p[n] - p[j]
-        q, dq = port_orifice_flow(dp, geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
-                                  pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
-        fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
-        fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
-        transfer(n, j, q, dq, ws, jac, want_jac)
-        if want_jac:
-            transfer_rate(n, j, q, area_derivative(q, dq, dp, geo[j, G_AD]) * geo[j, G_DAD], ws, jac)
+        if geo[j, G_AS] > 0.0:                          # a closed port books nothing (Q = dQ/dΔp = ∂Q/∂A = 0)
+            q, dq = port_orifice_flow(op.p_s - p[j], geo[j, G_AS], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                      pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
+            r = op.rho_s / rho[j] if q > 0.0 else 1.0   # the suction port is a source at p_s, not a state
+            acc[j] += r * q
+            fl[FL_SUCTION] += q
+            fl[FL_MASS_IN] += (op.rho_s if q > 0.0 else rho[j]) * q
+            if want_jac:
+                jac[j, j] -= r * dq * beta[j] + (r * q if q > 0.0 else 0.0)
+                jac[j, n + 1] += r * area_derivative(q, dq, op.p_s - p[j], geo[j, G_AS]) * geo[j, G_DAS]
+        if geo[j, G_AD] > 0.0:
+            dp = p[n] - p[j]
+            q, dq = port_orifice_flow(dp, geo[j, G_AD], pc.orifice_law, pc.cd_max, pc.lambda_crit,
+                                      pc.laminar_delta, pc.density, pc.viscosity)  # Eq. (21)
+            fl[FL_MASS_OUT] -= (rho[n] if q > 0.0 else rho[j]) * q
+            fl[FL_DELIVERY] -= q if q > 0.0 else rho[j] / rho[n] * q      # at delivery conditions
+            transfer(n, j, q, dq, ws, jac, want_jac)
+            if want_jac:
+                transfer_rate(n, j, q, area_derivative(q, dq, dp, geo[j, G_AD]) * geo[j, G_DAD], ws, jac)
 
 
 @njit(inline="always")

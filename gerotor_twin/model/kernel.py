@@ -132,11 +132,10 @@ def lu_solve(a, piv, b, x):
         m = piv[k]
         if m != k:
             x[k], x[m] = x[m], x[k]
-    for i in range(n):
-        s = x[i]
-        for j in range(i):
-            s -= a[i, j] * x[j]
-        x[i] = s
+    for j in range(n):              # forward, by columns: each x_i −= l_ij x_j in the order j = 0, 1, … (the row
+        xj = x[j]                   # sum's order, to the bit), the rows' updates independent of one another
+        for i in range(j + 1, n):
+            x[i] -= a[i, j] * xj
     for i in range(n - 1, -1, -1):
         s = x[i]
         for j in range(i + 1, n):
