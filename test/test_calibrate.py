@@ -328,3 +328,24 @@ def test_missing_bag_and_bad_calibration_block(tmp_path, capsys):
         load_config(p)
     with pytest.raises(InputError, match="--params"):
         parse_params("tip,tip")
+
+
+def test_a_flow_meter_at_atmospheric_pressure_reads_the_expanded_volume():
+    """Closed form: with the paper's oil law (ln ρ/ρ₀ = (p − p_atm)/β above its switch band) a meter at
+    atmospheric pressure reads the twin's delivery flow × ρ(p_d)/ρ(p_atm) = exp((p_d − p_atm)/β) (≈ 1.0017 at
+    25 bar, β ≈ 1.5 GPa), from the same run; the default meter is the delivery's, the twin's own flow."""
+    import math
+
+    from gerotor_twin.calibration import fit as C
+    from gerotor_twin.calibration.plateaus import PlateauRecord
+    cfg = load_config().with_fluid_model("paper")
+    p_atm = cfg.fluid.atmospheric_pa
+    rec = PlateauRecord("m.csv", 1, math.nan, math.nan, 1000 * math.pi / 30, p_atm + 25e5, math.nan, math.nan,
+                        5e-4, math.nan, 1)
+    flows = {}
+    for meter in ("delivery", "atmospheric"):
+        with C.Evaluator(cfg.to_dict(), "mobility", jobs=1, flow_meter=meter) as ev:
+            flows[meter] = ev.flows((), [np.zeros(0)], [rec])[0, 0]
+    beta = cfg.oil.bulk_modulus(cfg.reference_temperature_k)     # the oil law's β at the reference temperature
+    assert flows["atmospheric"] / flows["delivery"] == pytest.approx(math.exp(25e5 / beta), rel=1e-6)
+    assert 1.0014 < flows["atmospheric"] / flows["delivery"] < 1.002

@@ -23,7 +23,7 @@ from ..config import load_config, parse_config
 from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
-from .fit_model import DISPLAY_UNITS, PARAMETERS, apply, parse_params
+from .fit_model import DISPLAY_UNITS, FLOW_METERS, PARAMETERS, apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
@@ -124,7 +124,7 @@ def calibrate_map(path, *, config_path=None, progress=None, params=MAP_PARAMS, c
 def calibrate_records(records, sources, *, config_path=None, params=("tip", "lateral"), model: str = "mobility",
                       holdout: int = 4, jobs: int | None = None, rcond: float = 0.1,
                       flow_floor: float = C.MODEL_FLOW_SD_REL, cv: str = "none", candidates=None,
-                      progress=None) -> dict:
+                      flow_meter: str = "delivery", progress=None) -> dict:
     """Fit steady operating points (plateaus of recordings or rows of a map); the whole result.
 
     Parameters
@@ -142,6 +142,9 @@ def calibrate_records(records, sources, *, config_path=None, params=("tip", "lat
         more): choose among candidate sets by that cross-validation (:mod:`.selection`).
     candidates : sequence of tuple of str, optional
         The candidate sets (the prior is always one); default :func:`.selection.candidate_sets` of ``params``.
+    flow_meter : str
+        Where the records' flows were measured (:data:`.fit_model.FLOW_METERS`): the twin's flows are compared
+        as that meter reads them (:func:`.fit_model.at_meter`).
     """
     say = progress or (lambda s: None)
     cfg = load_config(config_path)
@@ -150,11 +153,12 @@ def calibrate_records(records, sources, *, config_path=None, params=("tip", "lat
     displacement = cfg.gears.displacement_closed_form()
     opts = {"rcond": rcond, "flow_floor": flow_floor}
     plan = FitPlan(tuple(params), model, holdout, S.resolve_scheme(cv, records),
-                   None if candidates is None else tuple(tuple(c) for c in candidates))
+                   None if candidates is None else tuple(tuple(c) for c in candidates), flow_meter)
     (out, wall) = C.run_timed(_run, records, raw, plan, jobs, displacement, opts, say)
     out.update({"bags": list(sources), "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                 "prior_config": _display_path(cfg.source), "model": model, "holdout_every": holdout,
                 "wall_time_s": wall, "software": f"gerotor_twin {__version__}", "flow_floor": flow_floor,
+                "flow_meter": flow_meter,
                 "plateau_records": [r.as_dict() for r in records]})
     out["config"] = apply(raw, out["params"], np.array([p["log_factor"] for p in out["fit"]["parameters"]]))
     return out
@@ -168,6 +172,7 @@ class FitPlan:
     holdout: int                 #: ``cv`` none: every k-th point held out (0: none)
     cv: str                      #: "none" | "speed" | "point"
     candidates: tuple | None     #: candidate sets; None: :func:`.selection.candidate_sets` of ``params``
+    flow_meter: str = "delivery"  #: where the flows were measured (:data:`.fit_model.FLOW_METERS`)
 
 
 def _display_path(path) -> str:
@@ -179,7 +184,7 @@ def _display_path(path) -> str:
 
 
 def _run(records, raw, plan: FitPlan, jobs, displacement, opts, say) -> dict:
-    with C.Evaluator(raw, plan.model, jobs, progress=say) as ev:
+    with C.Evaluator(raw, plan.model, jobs, progress=say, flow_meter=plan.flow_meter) as ev:
         if plan.cv == "none":
             train, held = C.split_holdout(records, plan.holdout)
             ho = _holdout(ev, plan.params, train, held, raw, displacement, opts, say) if held else None
@@ -263,7 +268,8 @@ def _select(ev, records, raw, plan: FitPlan, displacement, opts, say) -> tuple[d
     return {"cv": plan.cv, "folds": [[records[i].label() for i in f] for f in fold_index],
             "plateau_labels": [r.label() for r in records],
             "candidates": [c.summary() for c, _ in runs], "chosen": list(pick.names), "reason": why,
-            "eta_noise": noise, "cv_rmse": pick.cv_rmse, "cv_max_abs": float(np.abs(pick.cv_errors).max()),
+            "eta_noise": noise, "cv_rmse": pick.cv_rmse, "cv_rmse_se": pick.cv_rmse_se,
+            "cv_max_abs": float(np.abs(pick.cv_errors).max()),
             "prediction_band_eta": interval["typical_half_width_eta"], "prediction_interval": interval,
             "baseline": base, "baseline_better": bool(base["cv_rmse"] < pick.cv_rmse),
             "verdict": selection_verdict([c for c, _ in runs], pick, plan.cv, noise)}, fr
@@ -290,7 +296,7 @@ def provenance(result: dict) -> dict:
     ho = result["holdout"]
     block = {"tool": "gerotor-twin calibrate", "software": result["software"], "date": result["date"],
              "bags": result["bags"], "prior_config": result["prior_config"], "model": result["model"],
-             "plateaus": len(result["plateau_records"]),
+             "plateaus": len(result["plateau_records"]), "flow_meter": result.get("flow_meter", "delivery"),
              "parameters": {p["name"]: {"field": p["field"], "prior": p["prior"], "value": p["value"],
                                         "ci95": p["ci95"], "separately_identifiable": p["identifiable"]}
                             for p in f["parameters"]},
@@ -339,6 +345,9 @@ def print_summary(result: dict, out=None) -> None:
     out = out or sys.stdout
     f = result["fit"]
     kept = set(f["insensitive"]) | set(f.get("fixed", []))
+    if result.get("flow_meter", "delivery") != "delivery":
+        print(f"  the twin's flows compared as a flow meter at {result['flow_meter']} pressure reads them "
+              "(the same mass flow, its volume at that pressure: --flow-meter)", file=out)
     for p in f["parameters"]:
         u, unit = DISPLAY_UNITS.get(p["unit"], (1.0, ""))
         note = ("" if p["identifiable"] else "  (kept at the prior)" if p["name"] in kept
@@ -399,8 +408,13 @@ def print_selection(sel: dict, out=None) -> None:
               f"L/min (RMS over the plateaus)", file=out)
     b = sel["baseline"]
     if sel["baseline_better"]:
+        se = sel.get("cv_rmse_se", 0.0)
+        close = sel["cv_rmse"] - b["cv_rmse"] < se
+        digits = 3 if f"{100 * b['cv_rmse']:.2f}" == f"{100 * sel['cv_rmse']:.2f}" else 2
         print(f"  the empirical law predicts the held-out points better than the twin: held-out RMSE "
-              f"{100 * b['cv_rmse']:.2f} pt against {100 * sel['cv_rmse']:.2f} pt", file=out)
+              f"{100 * b['cv_rmse']:.{digits}f} pt against {100 * sel['cv_rmse']:.{digits}f} pt"
+              + (f" (less apart than the twin's held-out RMSE is uncertain, ± {_pt(se)} pt)" if close else ""),
+              file=out)
 
 
 def _candidates(args, names):
@@ -445,7 +459,7 @@ def cmd_calibrate(args) -> int:
                                                          FLOW_SENSOR_TAU_MAX_S, unit="s"))
     fit_options = {"config_path": args.config, "params": names, "model": args.model, "holdout": args.holdout,
                    "jobs": args.jobs, "flow_floor": args.flow_floor, "progress": say, "cv": cv,
-                   "candidates": candidates, "rcond": args.rcond}
+                   "candidates": candidates, "rcond": args.rcond, "flow_meter": args.flow_meter}
     if args.map:
         try:
             res = calibrate_map(args.map, **fit_options)
@@ -528,6 +542,10 @@ def add_parser(sub) -> None:
                         "with; default 0.1, for two parameters a correlation above 0.98). Lower it only for data "
                         "whose form you trust: it compares the directions with one another, not with the noise "
                         "(docs/calibration_health.md)")
+    p.add_argument("--flow-meter", choices=FLOW_METERS, default="delivery",
+                   help="where the flow was measured: at the delivery pressure (the twin's delivery flow, ISO 4409's "
+                        "outlet flow; default) or at atmospheric pressure (a meter in the return line: the same mass, "
+                        "its volume expanded back, ≈ 1.2 %% more at 170 bar)")
     p.add_argument("--json", metavar="F", help="write the whole result (per plateau, covariance) as JSON")
     p.add_argument("--report", metavar="F.html", help="write a one-page HTML report")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")

@@ -29,7 +29,8 @@ from scipy.optimize import least_squares
 from ..errors import InputError
 from ..twin.health import HealthSettings
 from . import identifiability as ident
-from .fit_model import PARAMETERS, PlateauTask, apply, plateau_flow, prior_values, with_edge_losses, without_edge_losses
+from .fit_model import (PARAMETERS, PlateauTask, apply, at_meter, plateau_flow, prior_values, with_edge_losses,
+                        without_edge_losses)
 from .plateaus import PlateauRecord
 
 __all__ = ["Evaluator", "FitResult", "fit", "split_holdout", "plateau_errors", "MODEL_FLOW_SD_REL"]
@@ -47,9 +48,11 @@ FD_STEP = 0.02          #: finite-difference step of the log-factors [-] (2 % of
 class Evaluator:
     """Runs :func:`plateau_flow` for many (config, plateau) pairs, in worker processes."""
 
-    def __init__(self, raw_prior: dict, bearing: str, jobs: int | None = None, progress=None):
+    def __init__(self, raw_prior: dict, bearing: str, jobs: int | None = None, progress=None,
+                 flow_meter: str = "delivery"):
         self.raw_prior = raw_prior
         self.bearing = bearing
+        self.flow_meter = flow_meter      #: where the flows compared were measured (:data:`.fit_model.FLOW_METERS`)
         self.table_tip = float(raw_prior["clearances"]["tooth_tip_m"])
         self.jobs = max(1, int(jobs or os.cpu_count() or 1))
         self.progress = progress
@@ -69,7 +72,8 @@ class Evaluator:
         self.close()
 
     def flows(self, names, xs: list[np.ndarray], records: list[PlateauRecord]) -> np.ndarray:
-        """Model mean delivery flow [m³/s], shape (len(xs), len(records)).
+        """Model mean delivery flow [m³/s] as the flow meter reads it (``flow_meter``, :func:`.fit_model.at_meter`),
+        shape (len(xs), len(records)).
 
         Each (config, plateau) runs once per evaluator: a run is kept and reused by every later call that
         needs it (the prior and the finite-difference steps of each fold and candidate set), and configs that
@@ -90,7 +94,8 @@ class Evaluator:
                 if key not in self._runs:
                     todo[key] = task
         self._run(todo)
-        flows = [with_edge_losses(self._runs[key], raw, r.omega) for key, raw, r in wanted]
+        flows = [at_meter(self._runs[key], with_edge_losses(self._runs[key], raw, r.omega), self.flow_meter)
+                 for key, raw, r in wanted]
         return np.array(flows).reshape(len(xs), len(records))
 
     def _run(self, todo: dict) -> None:

@@ -169,13 +169,15 @@ def plateau_flow(task: PlateauTask) -> dict:
         ``flow_m3s`` (revolution-mean delivery [m³/s]), ``theoretical_m3s``, ``revolutions``,
         ``periodicity_error``; and what :func:`with_edge_losses` needs to put another ``volumetric`` section on
         the same run: ``edge_free_m3s`` (the chamber model's delivery before the edge losses [m³/s]),
-        ``displacement_m3`` [m³/rev], ``density_kg_m3``, ``p_delivery_pa``, ``p_suction_pa`` (as run) [Pa abs].
+        ``displacement_m3`` [m³/rev], ``density_kg_m3``, ``p_delivery_pa``, ``p_suction_pa`` (as run) [Pa abs];
+        ``expansion_to_atm``, ρ(p_d)/ρ(p_atm) of the oil at the plateau's temperature [-] (:func:`at_meter`).
 
     Notes
     -----
     The plateau is simulated at its mean oil temperature ``task.oil_temperature_c`` (the
     config's reference temperature when the bag has none).
     """
+    from ..hydraulics.state_equation import log_density_of
     from ..model.pump import PumpModel
     from ..model.steady import run_steady
 
@@ -187,12 +189,15 @@ def plateau_flow(task: PlateauTask) -> dict:
     t_oil = celsius_to_kelvin(t_c) if t_c is not None and math.isfinite(t_c) else None
     res = run_steady(model, rad_s_to_rpm(task.omega), pa_abs_to_bar_gauge(task.p_delivery_pa, p_atm),
                      max_revolutions=60, rtol=1e-6, p_suction=ps, oil_temperature=t_oil)
+    p_d = float(np.mean(res.outputs.delivery_pressure))
+    eos = model.kernel.eos                                  # at the plateau's temperature (run_steady set it)
     return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,
             "revolutions": res.revolutions, "periodicity_error": res.periodicity_error,
             "edge_free_m3s": float(res.outputs.volumetric_efficiency * res.theoretical_flow_m3s),
             "displacement_m3": model.displacement, "density_kg_m3": cfg.fluid.density_kg_m3,
-            "p_delivery_pa": float(np.mean(res.outputs.delivery_pressure)),
-            "p_suction_pa": cfg.boundary.suction_pressure_pa if ps is None else ps}     # as run_steady takes them
+            "p_delivery_pa": p_d,
+            "p_suction_pa": cfg.boundary.suction_pressure_pa if ps is None else ps,     # as run_steady takes them
+            "expansion_to_atm": math.exp(log_density_of(p_d, eos) - log_density_of(p_atm, eos))}
 
 
 def without_edge_losses(raw: dict) -> dict:
@@ -202,6 +207,24 @@ def without_edge_losses(raw: dict) -> dict:
     out = dict(raw)
     out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0, "filling_loss_at_1000rpm": 0.0}
     return out
+
+
+#: Where a flow was measured (``calibrate --flow-meter``): at the delivery pressure, as the twin's delivery flow and
+#: ISO 4409's outlet flow are stated, or at atmospheric pressure (a meter in the return line: the same mass, its
+#: volume expanded back).
+FLOW_METERS = ("delivery", "atmospheric")
+
+
+def at_meter(run: dict, flow_m3s: float, meter: str) -> float:
+    r"""The twin's delivery flow ``flow_m3s`` [m³/s] of :func:`plateau_flow`'s ``run`` as a meter at ``meter``
+    (:data:`FLOW_METERS`) reads it: the same mass flow at that pressure's density,
+
+    .. math:: Q_{atm} = Q_d\,\frac{\rho(p_d)}{\rho(p_{atm})}
+
+    (the twin's state equation at the plateau's oil temperature; isothermal: a meter behind a cooler reads the
+    cooled oil's volume, which this leaves out).  At 170 bar with β ≈ 1.5 GPa the factor is ≈ 1.012.
+    """
+    return flow_m3s * run["expansion_to_atm"] if meter == "atmospheric" else flow_m3s
 
 
 def with_edge_losses(run: dict, raw: dict, omega: float) -> float:
