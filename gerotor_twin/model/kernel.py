@@ -288,7 +288,7 @@ def _first_substep_rates(ex, ey, theta, big_h, km, op, ws):
     if h == big_h:                  # one sub-step from the step's start: the set-up's own rates
         return
     th2 = theta + op.omega * big_h if h >= big_h * (1.0 - 1e-12) else theta + op.omega * h
-    _teeth_rates(ex, ey, theta, th2, h, big_h, False, km, ws)     # ws.cmat: the step's start, on the external path
+    _teeth_rates(ex, ey, theta, th2, h, big_h, bool(False), km, ws)   # ws.cmat: the step's start; bool(): not a literal
 
 
 @njit(inline="always")
