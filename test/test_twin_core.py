@@ -359,3 +359,28 @@ def test_lost_inputs_counted_and_status_warns(model):
     assert st["level"] == m.DIAG_WARN and "shaft_speed: 3 lost" in st["message"]
     assert core.input_accounting()["shaft_speed"]["received"] == 5
     assert any("lost before reception" in text for _, text in core.pop_events())
+
+
+@pytest.mark.parametrize("meter", ["delivery", "atmospheric"])
+def test_a_return_line_flow_meter_is_compared_at_the_delivery_pressure(meter):
+    """Closed form: with the paper's oil law (ln ρ/ρ₀ = (p − p_atm)/β above its switch band), a reading of a meter at
+    atmospheric pressure (``flow_meter: atmospheric``) reaches the residual and the health monitor as the same
+    mass's volume at the latest delivery pressure read: × exp(−(p_d − p_atm)/β) (≈ 0.99867 at 20 bar; to 1e-6,
+    the law's smoothed switch at p_atm, ``fluid.switch_band_pa``, bends it by less); a meter at the delivery
+    pressure (the default) as read."""
+    from gerotor_twin.config import load_config
+    from gerotor_twin.model.pump import PumpModel
+    cfg = load_config().with_fluid_model("paper")
+    core = TwinCore(PumpModel(cfg, "fixed"), TwinSettings(max_span_s=math.inf, flow_meter=meter))
+    feed(core, 0)
+    assert core.add_sample("delivery_flow", 5e-4, None, 1 * MS)
+    beta = cfg.oil.bulk_modulus(cfg.reference_temperature_k)
+    want = 5e-4 * (math.exp(-(PD - cfg.fluid.atmospheric_pa) / beta) if meter == "atmospheric" else 1.0)
+    for samples in (core.residual.samples, core.health._flow):
+        assert samples.between(0, 2 * MS) == [pytest.approx(want, rel=1e-6)]
+
+
+def test_flow_meter_setting_out_of_range_is_refused_naming_the_field():
+    """Bad input: a flow meter the twin does not know is refused naming the field and the allowed values."""
+    with pytest.raises(InputError, match="flow_meter = 'return' is invalid; allowed: delivery | atmospheric"):
+        TwinSettings(flow_meter="return")

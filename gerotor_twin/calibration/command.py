@@ -23,7 +23,8 @@ from ..config import load_config, parse_config
 from ..errors import InputError, check_range
 from ..units import m3s_to_lpm
 from . import fit as C
-from .fit_model import DISPLAY_UNITS, FLOW_METERS, PARAMETERS, apply, parse_params
+from ..hydraulics.meter import FLOW_METERS
+from .fit_model import DISPLAY_UNITS, PARAMETERS, apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
@@ -143,8 +144,8 @@ def calibrate_records(records, sources, *, config_path=None, params=("tip", "lat
     candidates : sequence of tuple of str, optional
         The candidate sets (the prior is always one); default :func:`.selection.candidate_sets` of ``params``.
     flow_meter : str
-        Where the records' flows were measured (:data:`.fit_model.FLOW_METERS`): the twin's flows are compared
-        as that meter reads them (:func:`.fit_model.at_meter`).
+        Where the records' flows were measured (``hydraulics.meter.FLOW_METERS``): the twin's flows are
+        compared as that meter reads them (:func:`.fit_model.at_meter`).
     """
     say = progress or (lambda s: None)
     cfg = load_config(config_path)
@@ -172,7 +173,7 @@ class FitPlan:
     holdout: int                 #: ``cv`` none: every k-th point held out (0: none)
     cv: str                      #: "none" | "speed" | "point"
     candidates: tuple | None     #: candidate sets; None: :func:`.selection.candidate_sets` of ``params``
-    flow_meter: str = "delivery"  #: where the flows were measured (:data:`.fit_model.FLOW_METERS`)
+    flow_meter: str = "delivery"  #: where the flows were measured (``hydraulics.meter.FLOW_METERS``)
 
 
 def _display_path(path) -> str:

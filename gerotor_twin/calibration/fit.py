@@ -52,7 +52,7 @@ class Evaluator:
                  flow_meter: str = "delivery"):
         self.raw_prior = raw_prior
         self.bearing = bearing
-        self.flow_meter = flow_meter      #: where the flows compared were measured (:data:`.fit_model.FLOW_METERS`)
+        self.flow_meter = flow_meter      #: where the flows compared were measured (``hydraulics.meter.FLOW_METERS``)
         self.table_tip = float(raw_prior["clearances"]["tooth_tip_m"])
         self.jobs = max(1, int(jobs or os.cpu_count() or 1))
         self.progress = progress

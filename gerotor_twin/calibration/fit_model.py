@@ -177,7 +177,7 @@ def plateau_flow(task: PlateauTask) -> dict:
     The plateau is simulated at its mean oil temperature ``task.oil_temperature_c`` (the
     config's reference temperature when the bag has none).
     """
-    from ..hydraulics.state_equation import log_density_of
+    from ..hydraulics.meter import expansion
     from ..model.pump import PumpModel
     from ..model.steady import run_steady
 
@@ -197,7 +197,7 @@ def plateau_flow(task: PlateauTask) -> dict:
             "displacement_m3": model.displacement, "density_kg_m3": cfg.fluid.density_kg_m3,
             "p_delivery_pa": p_d,
             "p_suction_pa": cfg.boundary.suction_pressure_pa if ps is None else ps,     # as run_steady takes them
-            "expansion_to_atm": math.exp(log_density_of(p_d, eos) - log_density_of(p_atm, eos))}
+            "expansion_to_atm": expansion(p_d, p_atm, eos)}
 
 
 def without_edge_losses(raw: dict) -> dict:
@@ -209,21 +209,10 @@ def without_edge_losses(raw: dict) -> dict:
     return out
 
 
-#: Where a flow was measured (``calibrate --flow-meter``): at the delivery pressure, as the twin's delivery flow and
-#: ISO 4409's outlet flow are stated, or at atmospheric pressure (a meter in the return line: the same mass, its
-#: volume expanded back).
-FLOW_METERS = ("delivery", "atmospheric")
-
-
 def at_meter(run: dict, flow_m3s: float, meter: str) -> float:
-    r"""The twin's delivery flow ``flow_m3s`` [m³/s] of :func:`plateau_flow`'s ``run`` as a meter at ``meter``
-    (:data:`FLOW_METERS`) reads it: the same mass flow at that pressure's density,
-
-    .. math:: Q_{atm} = Q_d\,\frac{\rho(p_d)}{\rho(p_{atm})}
-
-    (the twin's state equation at the plateau's oil temperature; isothermal: a meter behind a cooler reads the
-    cooled oil's volume, which this leaves out).  At 170 bar with β ≈ 1.5 GPa the factor is ≈ 1.012.
-    """
+    """The twin's delivery flow ``flow_m3s`` [m³/s] of :func:`plateau_flow`'s ``run`` as a meter at ``meter``
+    (:data:`~gerotor_twin.hydraulics.meter.FLOW_METERS`) reads it: the same mass flow at that pressure's volume
+    (:mod:`gerotor_twin.hydraulics.meter`; the twin's state equation at the plateau's oil temperature)."""
     return flow_m3s * run["expansion_to_atm"] if meter == "atmospheric" else flow_m3s
 
 

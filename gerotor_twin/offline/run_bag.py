@@ -30,6 +30,7 @@ from gerotor_twin.model.pump import BEARING_MODELS, PumpModel
 from gerotor_twin.twin.core import TwinCore
 from gerotor_twin.twin.inputs import INPUTS
 from gerotor_twin.twin.outputs import DIAGNOSTICS_TOPIC, log_topics, output_topics
+from gerotor_twin.hydraulics.meter import FLOW_METERS
 from gerotor_twin.twin.settings import NS, TwinSettings, oil_sensor_tau_arg
 
 __all__ = ["run_bag", "RUN_BAG_METADATA"]
@@ -207,7 +208,8 @@ def cmd_run_bag(args) -> int:
     _refuse_input_as_output(args.bag, out)
     if out.exists() and not args.overwrite:
         raise InputError("-o", str(out), "a file that does not exist yet", "pass --overwrite to replace it")
-    settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau))
+    settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=oil_sensor_tau_arg(args.oil_sensor_tau),
+                            flow_meter=args.flow_meter)
     try:
         res = run_bag(args.bag, out, model=args.model, config_path=args.config, overwrite=args.overwrite,
                       settings=settings, progress=None if args.quiet else sys.stderr,
@@ -233,6 +235,10 @@ def add_parser(sub) -> None:
     p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's oil thermometer [s]: the model runs at the reading "
                         "plus S × its rate of change (as the node's oil_sensor_tau_s; default 0 = off)")
+    p.add_argument("--flow-meter", choices=FLOW_METERS, default="delivery",
+                   help="where the bench's flow meter reads: at the delivery pressure (default) or at atmospheric "
+                        "pressure (a return-line meter: its readings are taken to the delivery pressure's volume "
+                        "before the residual and the health monitor compare them)")
     p.add_argument("--health", action="append", default=[], metavar="NAME=VALUE",
                    help="health monitor setting, as the node's health_<NAME> parameter (e.g. adapt=true, "
                         "warn_pt=1.5); repeatable")

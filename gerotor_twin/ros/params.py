@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from gerotor_twin.errors import InputError, check_range, short_repr
+from gerotor_twin.hydraulics.meter import FLOW_METERS
 from gerotor_twin.twin.settings import TwinSettings
 
 __all__ = ["Param", "PARAMETERS", "BUILTIN", "CORE_SETTINGS", "declare", "values", "check_value",
@@ -38,7 +39,7 @@ CORE_SETTINGS: dict[str, str] = {
     "input_filter_tau_s": "filter_tau_s", "stale_timeout_s": "stale_timeout_s",
     "stamp_restart_s": "stamp_restart_s", "stamp_ahead_s": "stamp_ahead_s",
     "stamp_rebase_samples": "stamp_rebase_samples", "max_span_s": "max_span_s",
-    "waveform_every": "waveform_every", "waveform_samples": "waveform_samples",
+    "waveform_every": "waveform_every", "waveform_samples": "waveform_samples", "flow_meter": "flow_meter",
 }
 _CORE = TwinSettings()
 
@@ -89,6 +90,11 @@ PARAMETERS: tuple[Param, ...] = (
     Param("oil_sensor_tau_s", _core("oil_sensor_tau_s"), "time constant of the oil thermometer [s]: the model runs at the reading "
                                    "plus tau x its rate of change (lag compensation); 0 = the reading as is",
           0.0, 120.0),
+    Param("flow_meter", _core("flow_meter"), "where the bench's flow meter reads: 'delivery' (at the delivery "
+                                             "pressure, as the twin's flow) or 'atmospheric' (in the return line: "
+                                             "each reading taken to the delivery pressure's volume before the "
+                                             "residual and the health monitor compare it)",
+          choices=FLOW_METERS),
     Param("input_queue_depth", 2000, "subscription history depth per input (sensor-data QoS) [messages]; "
                                      "2000 = a 1 s stall of a 1 kHz bench with 2x margin", 1, 100000),
     Param("input_coalesce_s", 0.002, "receiving thread: after a wake-up, wait this long, then take every "

@@ -103,6 +103,7 @@ from gerotor_twin.twin.clock_driver import ClockDriver, TickResult
 from gerotor_twin.twin.events import EventLog
 from gerotor_twin.twin.health import HealthMonitor, HealthSettings
 from gerotor_twin.twin.input_book import InputBook
+from gerotor_twin.hydraulics.meter import expansion
 from gerotor_twin.twin.residual import FlowResidual
 from gerotor_twin.twin.revolution import RevolutionRecorder
 from gerotor_twin.twin.settings import NS, TwinSettings
@@ -189,10 +190,20 @@ class TwinCore:
         if accepted and kind == "delivery_flow":
             with self.book.lock:
                 last = self.book.channels["delivery_flow"].latest()
+                p_d = self.book.channels["delivery_pressure"].latest()
             if last is not None:
-                self.health.add_flow(last[0], receive_ns)
-                self.residual.add_flow(last[0], receive_ns)
+                q = self._at_delivery(last[0], p_d)
+                self.health.add_flow(q, receive_ns)
+                self.residual.add_flow(q, receive_ns)
         return accepted
+
+    def _at_delivery(self, q_m3s: float, p_d) -> float:
+        """A measured flow [m³/s] as the volume at the delivery pressure (``settings.flow_meter``,
+        :mod:`gerotor_twin.hydraulics.meter`): a return-line meter's reading times ρ(p_atm)/ρ(p_d) at the latest
+        delivery pressure accepted (``p_d``: its (value, ...) or None: the reading as it is)."""
+        if self.settings.flow_meter == "delivery" or p_d is None:
+            return q_m3s
+        return q_m3s * expansion(self.model.config.fluid.atmospheric_pa, p_d[0], self.model.kernel.eos)
 
     def note_sequence(self, kind: str, seq: int | None, receive_ns: int) -> int:
         """Book the publisher sequence number of a received ``kind`` message (any thread).

@@ -13,6 +13,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.hydraulics.meter import FLOW_METERS
 
 __all__ = ["TwinSettings", "NS", "oil_sensor_tau_arg"]
 
@@ -78,6 +79,11 @@ class TwinSettings:
         model runs at the measured value plus ``tau`` × its rate of change, the
         inverse of the lag (:mod:`gerotor_twin.twin.oil_temperature`).  0 = use the
         reading as it is (default).  [0, 120] s.
+    flow_meter : str
+        Where the bench's flow meter reads (:mod:`gerotor_twin.hydraulics.meter`): ``delivery`` (at the
+        delivery pressure, as the twin's delivery flow; default) or ``atmospheric`` (in the return line: each
+        reading is taken to the delivery pressure's volume, ρ(p_atm)/ρ(p_d) at the latest delivery pressure
+        read, before the residual and the health monitor compare it; the log keeps the reading as received).
     """
 
     sample_period_s: float = 0.005
@@ -93,6 +99,7 @@ class TwinSettings:
     waveform_samples: int = 360
     error_report_period_s: float = 1.0
     oil_sensor_tau_s: float = 0.0
+    flow_meter: str = "delivery"
 
     def __post_init__(self) -> None:
         check_range("sample_period_s", self.sample_period_s, 1e-4, 0.1, lo_open=True, unit="s")
@@ -116,6 +123,8 @@ class TwinSettings:
                 raise InputError(name, v, f"an integer in [{lo}, {hi}]")
         check_range("error_report_period_s", self.error_report_period_s, 0.0, 3600.0, unit="s")
         check_range("oil_sensor_tau_s", self.oil_sensor_tau_s, 0.0, 120.0, unit="s")
+        if self.flow_meter not in FLOW_METERS:
+            raise InputError("flow_meter", self.flow_meter, " | ".join(FLOW_METERS))
 
     # integer-nanosecond views used by the core
     @property
