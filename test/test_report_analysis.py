@@ -100,3 +100,20 @@ def test_compare_reads_the_twin_through_the_flow_meter():
     expect = 1e-4 * tau * (np.exp(-0.5 / tau) - np.exp(-3.9 / tau)) / 3.4
     assert plain == pytest.approx(expect, rel=0.02)
     assert abs(read) <= 0.005 / 2 * 1e-4 * (np.exp(-1.0) - np.exp(-7.8)) / 3.4
+
+
+def test_meter_expansion_closed_form():
+    """Closed form: with the paper's oil law (ln ρ/ρ₀ = (p − p_atm)/β above its switch band) a meter at atmospheric
+    pressure reads the twin's flow × exp((p_d − p_atm)/β) per bin, β at the bin's plateau's oil temperature
+    (80 °C on the plateau, the reference temperature outside it; to 1e-6, the law's switch band at p_atm)."""
+    from gerotor_twin.config import load_config
+    from gerotor_twin.report.analysis import meter_expansion
+    cfg = load_config().with_fluid_model("paper")
+    p_atm = cfg.fluid.atmospheric_pa
+    pd = p_atm + np.array([5e5, 20e5, 20e5, 27e5])
+    grid = Grid(t=np.arange(4) * 0.1, omega=np.full(4, 100.0), p_delivery=pd, q_meas=np.full(4, 5e-4))
+    f = meter_expansion(grid, [Plateau(1, 1, 3, 0.1, 0.3, 1000.0, 20.0)], [80.0], cfg)
+    beta = [cfg.oil.bulk_modulus(t) for t in (cfg.reference_temperature_k, 353.15, 353.15,
+                                              cfg.reference_temperature_k)]
+    assert f == pytest.approx(np.exp((pd - p_atm) / np.array(beta)), rel=1e-6)
+    assert f[1] > f[0] > 1.0 and f[1] != pytest.approx(math.exp(20e5 / beta[0]), rel=1e-6)   # β of 80 °C, not 40

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["FLOW_METERS", "expansion"]
+__all__ = ["FLOW_METERS", "expansion", "oil_state_equation"]
 
 #: Where a measured flow was read: ``delivery`` (at the delivery pressure: the twin's delivery flow) or
 #: ``atmospheric`` (in the return line).  ``calibrate --flow-meter``, the twin's ``flow_meter`` setting.
@@ -26,3 +26,10 @@ def expansion(p_from: float, p_to: float, eos) -> float:
     times this is the same mass's volume flow at ``p_to`` [Pa abs]."""
     from .state_equation import log_density_of       # numba: imported on first use, not with the setting's name
     return math.exp(log_density_of(p_from, eos) - log_density_of(p_to, eos))
+
+
+def oil_state_equation(config, t_k: float | None = None):
+    """The state equation of the oil of a pump ``config`` at T = ``t_k`` [K] (None: its reference temperature),
+    built as the twin builds it (≈ 1–3 ms), for :func:`expansion`."""
+    from .state_equation import state_equation
+    return state_equation(config.fluid_at(t_k), config.fluid_model, config.air)

@@ -94,6 +94,25 @@ def plateau_temperatures(bench: BenchData, grid: Grid, plateaus: list[Plateau]) 
     return out
 
 
+def meter_expansion(grid: Grid, plateaus: list[Plateau], temps: list[float | None], config) -> np.ndarray:
+    """Per grid bin, ρ(p_d)/ρ(p_atm) of the twin's oil (:mod:`gerotor_twin.hydraulics.meter`): the factor on the
+    twin's delivery flow that a flow meter at atmospheric pressure reads, at the bin's delivery pressure and its
+    plateau's oil temperature (the config's reference temperature outside the plateaus)."""
+    from gerotor_twin.hydraulics.meter import expansion, oil_state_equation
+    t_bin = np.full(grid.t.shape, np.nan)
+    for p, tc in zip(plateaus, temps):
+        if tc is not None:
+            t_bin[p.i0:p.i1] = tc + 273.15
+    out = np.ones(grid.t.shape)
+    p_atm = config.fluid.atmospheric_pa
+    for t_k in {None if not np.isfinite(t) else float(t) for t in t_bin}:
+        eos = oil_state_equation(config, t_k)
+        at = ~np.isfinite(t_bin) if t_k is None else t_bin == t_k
+        for i in np.flatnonzero(at & np.isfinite(grid.p_delivery)):
+            out[i] = expansion(float(grid.p_delivery[i]), p_atm, eos)
+    return out
+
+
 def add_temperatures(comp: dict, temps: list[float | None]) -> dict:
     """Put each plateau's oil temperature [°C] (``oil_temperature_c``) into the rows of a :func:`compare` result."""
     for row, tc in zip(comp["plateaus"], temps):
@@ -178,9 +197,10 @@ def read_through_lag(t: np.ndarray, v: np.ndarray, tau: float) -> np.ndarray:
 
 
 def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3: float,
-            flow_sensor_tau_s: float = 0.0) -> dict:
+            flow_sensor_tau_s: float = 0.0, meter_expansion: np.ndarray | None = None) -> dict:
     """Metrics of one twin against the bench; with ``flow_sensor_tau_s`` > 0 [s] the twin's flow as the bench's
-    meter reads it (:func:`read_through_lag`), its η_v from that flow.
+    meter reads it (:func:`read_through_lag`), its η_v from that flow; with ``meter_expansion`` (per grid bin,
+    :func:`meter_expansion`) the twin's flow and η_v as a meter at another pressure reads them.
 
     Returns
     -------
@@ -201,6 +221,9 @@ def compare(grid: Grid, plateaus: list[Plateau], twin: TwinData, displacement_m3
     qth_meas = displacement_m3 * grid.omega / (2 * math.pi)
     with np.errstate(divide="ignore", invalid="ignore"):
         eta_meas = np.where(qth_meas > 0, grid.q_meas / qth_meas, np.nan)
+    if meter_expansion is not None:
+        q_pred = q_pred * meter_expansion
+        eta_pred = eta_pred * meter_expansion
     # the twin has no prediction outside its own span: blank those bins
     outside = (grid.t < ts.min()) | (grid.t > ts.max())
     q_pred[outside] = np.nan

@@ -10,7 +10,8 @@ from gerotor_twin.errors import InputError, check_range, one_line
 
 from . import layout
 from .acceptance import PASS, AcceptanceCriterion, add_arguments, criterion_from_args, tally_text, verdict
-from .analysis import add_temperatures, compare, find_plateaus, make_grid, plateau_temperatures
+from .analysis import add_temperatures, compare, find_plateaus, make_grid, meter_expansion, plateau_temperatures
+from ..hydraulics.meter import FLOW_METERS
 from .context import ReportContext
 from .data import load_bench, load_twin, overlap, pump_config
 from .html import render
@@ -63,16 +64,19 @@ def _load(bench_path, twin_paths, labels):
 
 
 def make_context(bench, twins, criterion: AcceptanceCriterion, stem: str,
-                 max_points: int = DEFAULT_MAX_POINTS, flow_sensor_tau_s: float = 0.0) -> ReportContext:
+                 max_points: int = DEFAULT_MAX_POINTS, flow_sensor_tau_s: float = 0.0,
+                 flow_meter: str = "delivery") -> ReportContext:
     """Grid, plateaus, metrics and verdicts of a bench recording against twin logs (the twins' flow read through
-    the bench flow meter's lag ``flow_sensor_tau_s`` [s] when > 0, :func:`.analysis.compare`)."""
+    the bench flow meter's lag ``flow_sensor_tau_s`` [s] when > 0, and at its pressure, ``flow_meter``:
+    :func:`.analysis.compare`)."""
     span = overlap(bench, twins)
     grid = make_grid(bench, span)
     cfg = pump_config(twins[0])
     plateaus = find_plateaus(grid, p_atm=cfg.fluid.atmospheric_pa)
     disp = cfg.gears.displacement_closed_form()
     temps = plateau_temperatures(bench, grid, plateaus)
-    comps = [add_temperatures(compare(grid, plateaus, tw, disp, flow_sensor_tau_s), temps) for tw in twins]
+    expand = meter_expansion(grid, plateaus, temps, cfg) if flow_meter == "atmospheric" else None
+    comps = [add_temperatures(compare(grid, plateaus, tw, disp, flow_sensor_tau_s, expand), temps) for tw in twins]
     verdicts = tuple(tuple(verdict(r, criterion) for r in c["plateaus"]) for c in comps)
     return ReportContext(bench, tuple(twins), grid, tuple(plateaus), tuple(comps), verdicts, cfg, disp, criterion,
                          span, stem, max_points)
@@ -122,7 +126,7 @@ def _downloads(ctx: ReportContext, blocks: list) -> list[tuple[str, str, str]]:
 
 def build_report(bench_path, twin_paths, output, json_path=None, labels=None, title=None,
                  criterion: AcceptanceCriterion | None = None, max_points: int = DEFAULT_MAX_POINTS,
-                 csv_dir=None, flow_sensor_tau_s: float = 0.0) -> dict:
+                 csv_dir=None, flow_sensor_tau_s: float = 0.0, flow_meter: str = "delivery") -> dict:
     """Write the HTML report (and JSON metrics, and optionally the CSV files); return the metrics dict.
 
     Parameters
@@ -146,6 +150,10 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
     flow_sensor_tau_s : float
         Time constant of the bench's flow meter [s] (first-order lag, 0: none): the twins' flow is compared as
         that meter reads it (:func:`.analysis.read_through_lag`).
+    flow_meter : str
+        Where the bench's flow meter reads (``hydraulics.meter.FLOW_METERS``): ``atmospheric`` (a return-line
+        meter) compares the twins' flow as the same mass's volume at atmospheric pressure
+        (:func:`.analysis.meter_expansion`).
 
     Raises
     ------
@@ -160,7 +168,7 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
     check_range("--flow-sensor-tau", flow_sensor_tau_s, 0.0, 60.0, unit="s")
     bench, twins = _load(bench_path, twin_paths, labels)
     ctx = make_context(bench, twins, criterion or AcceptanceCriterion(), Path(output).stem, max_points,
-                       flow_sensor_tau_s)
+                       flow_sensor_tau_s, flow_meter)
     blocks = layout.blocks(ctx)
     specs = [panel_data(b, max_points) for b in blocks if isinstance(b, TimeSeries)]
     downloads = _downloads(ctx, blocks)
@@ -168,6 +176,9 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
     if flow_sensor_tau_s > 0:
         notes.append(f"the twins' flow is compared as the bench's flow meter reads it, through a first-order lag of "
                      f"{flow_sensor_tau_s:g} s (--flow-sensor-tau)")
+    if flow_meter == "atmospheric":
+        notes.append("the twins' flow is compared as a flow meter at atmospheric pressure reads it, the same mass's "
+                     "volume there (--flow-meter atmospheric)")
     page = render(title or f"Twin vs bench: {Path(bench.path).name}", headline, notes, blocks, specs,
                   ctx.plateaus, ctx.span, provenance(ctx), downloads, DEFINITIONS)
     Path(output).parent.mkdir(parents=True, exist_ok=True)
@@ -178,7 +189,7 @@ def build_report(bench_path, twin_paths, output, json_path=None, labels=None, ti
             (Path(csv_dir) / name).write_text(text, encoding="utf-8")
     result = {"bench": bench.path, "span_s": list(ctx.span), "displacement_m3": ctx.displacement_m3,
               "plateaus": [p.__dict__ for p in ctx.plateaus], "twins": [_json_ready(c) for c in ctx.comps],
-              "acceptance": ctx.criterion.as_dict(), "flow_sensor_tau_s": flow_sensor_tau_s,
+              "acceptance": ctx.criterion.as_dict(), "flow_sensor_tau_s": flow_sensor_tau_s, "flow_meter": flow_meter,
               "verdicts": [[dict(v, plateau=p.index) for v, p in zip(vs, ctx.plateaus)] for vs in ctx.verdicts],
               "headline": headline, "notes": notes, "downloads": [n for n, _, _ in downloads],
               "figures_drawn": sum(1 for b in blocks if getattr(b, "png", None) is not None),
@@ -201,7 +212,8 @@ def cmd_report(args) -> int:
     crit = criterion_from_args(args)
     try:
         res = build_report(args.bench, args.twin, args.output, args.json, args.label, criterion=crit,
-                           max_points=args.max_points, csv_dir=args.csv_dir, flow_sensor_tau_s=args.flow_sensor_tau)
+                           max_points=args.max_points, csv_dir=args.csv_dir, flow_sensor_tau_s=args.flow_sensor_tau,
+                           flow_meter=args.flow_meter)
     except McapReadError as exc:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return 2
@@ -233,6 +245,9 @@ def add_parser(sub) -> None:
     p.add_argument("--flow-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's flow meter [s] (first-order lag): the twin's flow is compared "
                         "as that meter reads it (default 0 = as predicted)")
+    p.add_argument("--flow-meter", choices=FLOW_METERS, default="delivery",
+                   help="where the bench's flow meter reads: at the delivery pressure (default) or at atmospheric "
+                        "pressure (a return-line meter: the twins' flow compared as the same mass's volume there)")
     p.add_argument("--check", action="store_true",
                    help="exit with status 1 unless every plateau passes the acceptance criterion")
     add_arguments(p)
