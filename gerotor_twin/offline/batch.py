@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import IO
 
 from ..errors import InputError
+from ..hydraulics.meter import FLOW_METERS
 from ..model.pump import BEARING_MODELS
 from .engine import Progress, add_engine_arguments, check_engine_args, dask_client, discarded_if_unused, run_tasks
 from .results_store import ResultStore
@@ -62,14 +63,16 @@ def _item(bag: Path) -> dict:
     return {"id": digest, "bag": str(bag), "name": f"{bag.stem}-{digest[:8]}"}
 
 
-def _prepare(out: Path, model: str, config: str | None, calibrate: bool = False, oil_sensor_tau_s: float = 0.0) -> None:
+def _prepare(out: Path, model: str, config: str | None, calibrate: bool = False, oil_sensor_tau_s: float = 0.0,
+             flow_meter: str = "delivery") -> None:
     manifest = out / "manifest.json"
     want = {"model": model, "config": str(Path(config).resolve()) if config else None, "calibrate": calibrate,
-            "oil_sensor_tau_s": oil_sensor_tau_s}
+            "oil_sensor_tau_s": oil_sensor_tau_s, "flow_meter": flow_meter}
     if manifest.exists():
-        have = {"calibrate": False, "oil_sensor_tau_s": 0.0, **json.loads(manifest.read_text())}
+        have = {"calibrate": False, "oil_sensor_tau_s": 0.0, "flow_meter": "delivery",
+                **json.loads(manifest.read_text())}
         for key, opt in (("model", "--model"), ("config", "--config"), ("calibrate", "--calibrate"),
-                         ("oil_sensor_tau_s", "--oil-sensor-tau")):
+                         ("oil_sensor_tau_s", "--oil-sensor-tau"), ("flow_meter", "--flow-meter")):
             if have.get(key) != want[key]:
                 raise InputError(opt, want[key], f"{have.get(key)!r} (the fleet in {out} was run with it)",
                                  "use another -o for another model, pump config or calibration choice")
@@ -112,13 +115,15 @@ def write_fleet(out: Path, rows: list[dict], info: list[str]) -> None:
 
 def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None = None, scheduler: str | None = None,
               workers: int | None = None, calibrate: bool = False, oil_sensor_tau_s: float = 0.0,
-              progress: IO[str] | None = sys.stderr) -> dict:
+              flow_meter: str = "delivery", progress: IO[str] | None = sys.stderr) -> dict:
     """Process every recording matched by ``pattern`` into ``out``; return counts and timing.
 
     ``oil_sensor_tau_s`` [s]: the bench thermometer's lag, undone in the twin runs and the calibration
-    (as ``run-bag --oil-sensor-tau``)."""
-    from ..twin.settings import oil_sensor_tau_arg
+    (as ``run-bag --oil-sensor-tau``); ``flow_meter``: where the bench's flow meter reads, in the twin runs, the
+    reports and the calibration (as ``run-bag --flow-meter``)."""
+    from ..twin.settings import TwinSettings, oil_sensor_tau_arg
     oil_sensor_tau_arg(oil_sensor_tau_s)
+    TwinSettings(flow_meter=flow_meter)                 # checked once here, not once per bag
     if model not in BEARING_MODELS:
         raise InputError("--model", model, " | ".join(BEARING_MODELS))
     check_engine_args(scheduler, workers)
@@ -128,9 +133,9 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
     items = [_item(b) for b in find_bags(pattern)]
     out = Path(out)
     with discarded_if_unused(out, ("manifest.json", "bags.jsonl"), "bags.jsonl"):
-        _prepare(out, model, config, calibrate, oil_sensor_tau_s)
+        _prepare(out, model, config, calibrate, oil_sensor_tau_s, flow_meter)
         settings = {"out": str(out.resolve()), "model": model, "calibrate": calibrate,
-                    "oil_sensor_tau_s": oil_sensor_tau_s,
+                    "oil_sensor_tau_s": oil_sensor_tau_s, "flow_meter": flow_meter,
                     "config": str(Path(config).resolve()) if config else None}
         t0 = time.monotonic()
         with ResultStore(out / "bags.jsonl") as store:
@@ -158,7 +163,7 @@ def run_batch(pattern: str, out, *, model: str = "mobility", config: str | None 
 def cmd_batch(args) -> int:
     res = run_batch(args.bags, args.output, model=args.model, config=args.config, scheduler=args.scheduler,
                     workers=args.workers, calibrate=args.calibrate, oil_sensor_tau_s=args.oil_sensor_tau,
-                    progress=None if args.quiet else sys.stderr)
+                    flow_meter=args.flow_meter, progress=None if args.quiet else sys.stderr)
     out = Path(args.output)
     print(f"batch: {res['recordings']} recordings, {res['ok']} reported, {res['failed']} failed "
           f"({res['processed']} processed in {res['wall_s']:.1f} s on {res['workers']} worker(s), "
@@ -180,6 +185,9 @@ def add_parser(sub) -> None:
     p.add_argument("--oil-sensor-tau", type=float, default=0.0, metavar="S",
                    help="time constant of the bench's oil thermometer [s], undone in the twin and the fit "
                         "(as run-bag --oil-sensor-tau; default 0)")
+    p.add_argument("--flow-meter", choices=FLOW_METERS, default="delivery",
+                   help="where the bench's flow meter reads, in the twin, the reports and the fit (as run-bag "
+                        "--flow-meter; default delivery)")
     p.add_argument("--calibrate", action="store_true",
                    help="also fit the pump (tooth-tip + lateral clearances) to each recording: "
                         "bags/<name>/pump_fitted.yaml and the fitted factor in the summary (minutes per bag)")

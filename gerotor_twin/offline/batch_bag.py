@@ -73,7 +73,8 @@ def health_summary(twin_log) -> dict | None:
             "fault_confidence": last.get("fault_confidence")}
 
 
-def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s: float = 0.0) -> dict:
+def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s: float = 0.0,
+                        flow_meter: str = "delivery") -> dict:
     """Calibrate the pump on one recording (``gerotor-twin calibrate``, one process: a Dask worker is
     one core); write ``pump_fitted.yaml`` and ``calibration.json`` into ``out_dir``; return the fitted
     combinations with their 95 % intervals and residuals, or ``{"error": reason}`` (the row stays ok)."""
@@ -85,7 +86,7 @@ def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s
     from ..calibration.plateaus import DetectorSettings, thermometer_lag_note
     try:                          # as `calibrate --bench` does it: its candidate sets, cross-validated
         res = calibrate_bags([bag], config_path=config, model=model, jobs=1, cv="auto", candidates=BENCH_CANDIDATES,
-                             detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s))
+                             detector=DetectorSettings(oil_sensor_tau_s=oil_sensor_tau_s), flow_meter=flow_meter)
         (out_dir / "pump_fitted.yaml").write_text(yaml.safe_dump(fitted_config(res), sort_keys=False))
         (out_dir / "calibration.json").write_text(json.dumps(res, indent=1, default=float))
     except (InputError, McapReadError, ValueError, np.linalg.LinAlgError) as exc:
@@ -119,17 +120,20 @@ def process_bag(settings: dict, item: dict) -> dict:
            "twin": str(d / "twin.mcap"), "report": str(d / "report.html")}
     try:
         d.mkdir(parents=True, exist_ok=True)
-        twin_settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=settings.get("oil_sensor_tau_s", 0.0))
+        meter = settings.get("flow_meter", "delivery")
+        twin_settings = TwinSettings(max_span_s=math.inf, oil_sensor_tau_s=settings.get("oil_sensor_tau_s", 0.0),
+                                     flow_meter=meter)
         stats = run_bag(item["bag"], d / "twin.mcap", model=settings["model"], config_path=settings["config"],
                         settings=twin_settings, overwrite=True, progress=None)
-        result = build_report(item["bag"], [d / "twin.mcap"], d / "report.html", d / "report.json")
+        result = build_report(item["bag"], [d / "twin.mcap"], d / "report.html", d / "report.json",
+                              flow_meter=meter)
         p_atm = load_config(settings["config"]).fluid.atmospheric_pa
         row.update(summary_row(load_bench(item["bag"]), result, p_atm))
         row["real_time_factor"] = stats["real_time_factor"]
         row["health"] = health_summary(d / "twin.mcap")
         if settings.get("calibrate"):
             row["calibration"] = calibration_summary(item["bag"], settings["config"], settings["model"], d,
-                                                     settings.get("oil_sensor_tau_s", 0.0))
+                                                     settings.get("oil_sensor_tau_s", 0.0), meter)
         if not math.isfinite(row["duration_s"]):
             raise McapReadError(item["bag"], "no finite time span")
     except (McapReadError, InputError, OSError, ValueError) as exc:
