@@ -223,3 +223,25 @@ def test_each_shipped_bench_pump_runs(path):
     assert yaml.safe_load(metadata(data)[EMULATOR_METADATA]["bench_pump"])["name"] == bp.name
     q = _samples(data)["/bench/delivery_flow"][1]
     assert np.all((q > 0.5 * 22.78e-6 * 1000 / 60) & (q < 22.78e-6 * 1000 / 60))
+
+
+def test_a_return_line_flow_meter_reads_the_expanded_volume(cfg):
+    """Closed form: with the paper's oil law (ln ρ/ρ₀ = (p − p_atm)/β above its switch band) at a constant 40 °C, a
+    flow meter in the return line (``delivery_flow.at: atmospheric``) reads the delivered flow × exp((p_d −
+    p_atm)/β): with the same seed and no meter noise or lag, the readings over 10 bar and over 15 bar (the test
+    profile's step at 0.2 s, a 1 ms valve) are those at the delivery pressure times exp(10e5/β) and exp(15e5/β)
+    (to 1e-6, the law's switch band at p_atm)."""
+    paper = cfg.with_fluid_model("paper")
+    base = BenchSpec(valve_tau_s=1e-3, temperature_start_c=40.0, temperature_end_c=40.0, flow_rate_hz=1000.0)
+    flows = {}
+    for at in ("delivery", "atmospheric"):
+        bp = parse_bench_pump({"sensors": {"delivery_flow": {"tau_s": 0.0, "noise_rel": 0.0, "noise_m3s": 0.0,
+                                                             "at": at}}})
+        buf = io.BytesIO()
+        synthesize(get_profile("test"), buf, bp.bench_spec(base), config=paper, bench_pump=bp, progress=None)
+        flows[at] = _samples(buf.getvalue())["/bench/delivery_flow"]
+    t, ratio = flows["delivery"][0], flows["atmospheric"][1] / flows["delivery"][1]
+    beta = paper.oil.bulk_modulus(313.15)
+    for (t0, t1), bar in (((0.1, 0.19), 10.0), ((0.3, 0.4), 15.0)):
+        sel = (t > t0) & (t < t1)
+        assert sel.sum() >= 5 and ratio[sel] == pytest.approx(math.exp(bar * 1e5 / beta), rel=1e-6), bar

@@ -16,7 +16,7 @@ bounded) is a mapping; every key is optional::
     sensors:                        # bias, first-order lag, noise of each bench sensor (SI)
       speed: {bias_rad_s: 0.5, tau_s: 0.02, noise_rad_s: 0.1}
       delivery_pressure: {bias_pa: 5000, tau_s: 0.01, noise_pa: 2000}
-      delivery_flow: {bias_m3s: 1.0e-6, tau_s: 0.2, noise_m3s: 1.0e-6, noise_rel: 0.003}
+      delivery_flow: {bias_m3s: 1.0e-6, tau_s: 0.2, noise_m3s: 1.0e-6, noise_rel: 0.003, at: atmospheric}
       oil_temperature: {bias_c: 0.5, tau_s: 3.0, noise_c: 0.05}
 
 ``pump``: clearance factors multiply the nominal config's ``clearances`` (tooth tip, lateral,
@@ -32,7 +32,8 @@ bench pump cannot give one lobe or tooth its own clearance.
 ``sensors``: each key replaces the emulator's default
 (:class:`~gerotor_twin.bench_emulator.sensors.BenchSpec`); a bias adds to every recorded sample, a
 lag filters the true value before it (y' = (u − y)/τ), noise is Gaussian with the given standard
-deviation.
+deviation; ``delivery_flow.at`` says where the flow meter reads (``delivery``, default, or ``atmospheric``: a
+meter in the return line, :mod:`gerotor_twin.hydraulics.meter`).
 
 Every problem is one :class:`~gerotor_twin.errors.InputError` naming the file, the field, the value
 and the allowed range.  :meth:`BenchPump.resolved` fills every field with the value used, which
@@ -46,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from gerotor_twin.errors import InputError, check_range
+from gerotor_twin.hydraulics.meter import FLOW_METERS
 from gerotor_twin.hydraulics.orifice import ORIFICE_LAWS
 
 from .profile_file import name_and_description
@@ -79,6 +81,7 @@ SENSOR_FIELDS: dict[str, tuple[str, tuple]] = {
     "delivery_flow.tau_s": ("flow_tau_s", (0.0, 10.0, "s")),
     "delivery_flow.noise_m3s": ("flow_noise_m3s", (0.0, 1.0e-4, "m^3/s")),
     "delivery_flow.noise_rel": ("flow_noise_rel", (0.0, 0.1, "")),
+    "delivery_flow.at": ("flow_meter", FLOW_METERS),
     "oil_temperature.bias_c": ("temperature_bias_c", (-20.0, 20.0, "K")),
     "oil_temperature.tau_s": ("temperature_tau_s", (0.0, 600.0, "s")),
     "oil_temperature.noise_c": ("temperature_noise_c", (0.0, 5.0, "K")),

@@ -192,10 +192,12 @@ class BenchSensors:
         Shaft angle at the start [rad].
     faults : FaultScenario
         The run's faults; the sensor kinds (pressure offset, speed dropout, flow-meter drift) act here.
+    meter0 : float
+        What the flow meter reads per unit of delivered flow at the start (:func:`meter_factor`) [-].
     """
 
     def __init__(self, spec: BenchSpec, dt: float, rng: dict, emit: Callable, inp: Inputs, q0: float,
-                 temp0_c: float, theta0: float, faults: FaultScenario = FaultScenario()):
+                 temp0_c: float, theta0: float, faults: FaultScenario = FaultScenario(), meter0: float = 1.0):
         self.spec, self.rng, self.emit, self.dt = spec, rng, emit, dt
         self.offset = faults.by_kind.get("pressure_offset")
         self.drift = faults.by_kind.get("flowmeter_drift")
@@ -207,7 +209,7 @@ class BenchSensors:
         self.delivery = FirstOrderLag(spec.pressure_tau_s, dt, inp.p_delivery)
         self.suction = FirstOrderLag(spec.suction_tau_s, dt, inp.p_suction)
         self.speed = FirstOrderLag(spec.speed_tau_s, dt, inp.omega)
-        self.flow = FirstOrderLag(spec.flow_tau_s, dt, q0)
+        self.flow = FirstOrderLag(spec.flow_tau_s, dt, q0 * meter0)     # meter0: the meter's factor at the start
         self.thermo = FirstOrderLag(spec.temperature_tau_s, dt, temp0_c)
         self.encoder = Encoder(spec.encoder_counts, max(1, int(round(spec.speed_window_s * spec.internal_rate_hz))),
                                dt, theta0, inp.omega)
@@ -217,13 +219,14 @@ class BenchSensors:
         return self.rng[stream].normal(0.0, sigma)
 
     def tick(self, i: int, t_ns: int, pd: float, ps: float, q_inst: float, q_mean: float, oil_c: float,
-             theta: float) -> None:
+             theta: float, meter_factor: float = 1.0) -> None:
         """Tick ``i`` (from 1), stamped ``t_ns`` [ns]: the true delivery and suction pressures [Pa],
-        instantaneous and tick-mean delivery flow [m³/s], oil temperature [°C] and shaft angle [rad]."""
+        instantaneous and tick-mean delivery flow [m³/s], oil temperature [°C] and shaft angle [rad]; the flow
+        meter reads ``meter_factor`` × the tick-mean flow (its pressure's volume of that mass, ``spec.flow_meter``)."""
         s, dec, t = self.spec, self.dec, i * self.dt
         p_meas = self.delivery(pd + s.ripple_impedance * (q_inst - self.ripple_dc(q_mean)))
         s_meas = self.suction(ps - 0.1 * s.ripple_impedance * (q_inst - self.ripple_dc.y))
-        q_meas = self.flow(q_mean)
+        q_meas = self.flow(q_mean * meter_factor)
         temp = self.thermo(oil_c)
         w_enc, angle = self.encoder(theta)
         w_meas = self.speed(w_enc)
@@ -251,6 +254,16 @@ class BenchSensors:
             self.emit("/bench/oil_temperature", m.temperature(
                 t_ns, temp + s.temperature_bias_c + self._noise("temperature", s.temperature_noise_c),
                 variance=s.temperature_noise_c ** 2), t_ns)
+
+
+def meter_factor(spec: BenchSpec, model, p_atm: float) -> Callable[[float], float]:
+    """p_d [Pa abs] → what the bench's flow meter reads per unit of delivered flow at p_d: 1 at the delivery
+    pressure, ρ(p_d)/ρ(p_atm) of the emulated pump's oil (at its current temperature) in the return line
+    (``spec.flow_meter``, :mod:`gerotor_twin.hydraulics.meter`)."""
+    if spec.flow_meter == "delivery":
+        return lambda p_d: 1.0
+    from gerotor_twin.hydraulics.meter import expansion
+    return lambda p_d: expansion(p_d, p_atm, model.kernel.eos)
 
 
 def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, config: PumpConfig | None = None,
@@ -315,7 +328,9 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
         if write:
             log.write(topic, msg, t_ns + int(round(lat * 1e9)), t_ns)
 
-    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, drive.bath.start_c, state.theta, scenario)
+    meter = meter_factor(spec, model, cfg.fluid.atmospheric_pa)
+    sensors = BenchSensors(spec, dt, rng, emit, inp, q_dc0, drive.bath.start_c, state.theta, scenario,
+                           meter(inp.p_delivery))
     try:
         for k in range(n_ticks):
             true_c[k], state = update_pump(model, cfg, spec, scenario, dt, profile.duration_s, k, state)
@@ -327,7 +342,8 @@ def synthesize(profile: Profile, output, spec: BenchSpec = BenchSpec(), *, confi
                           math.hypot(*state.eccentricity))
             t = (k + 1) * dt
             sensors.tick(k + 1, t0_ns + int(round(t * 1e9)), inp.p_delivery, inp.p_suction,
-                         float(out.delivery_flow[-1]), q_mean, true[2, k], state.theta)
+                         float(out.delivery_flow[-1]), q_mean, true[2, k], state.theta,
+                         meter(inp.p_delivery))
             show(t)
     finally:
         counts = log.message_counts

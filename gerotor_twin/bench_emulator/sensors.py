@@ -59,6 +59,10 @@ class BenchSpec:
         Flow-meter noise: relative to the reading [-] and absolute [m³/s] (standard deviations).
     flow_bias_m3s : float
         Flow-meter bias [m³/s].
+    flow_meter : str
+        Where the flow meter reads (:mod:`gerotor_twin.hydraulics.meter`): ``delivery`` (the delivered flow at the
+        delivery pressure) or ``atmospheric`` (a return-line meter: the same mass's volume at atmospheric pressure,
+        ρ(p_d)/ρ(p_atm) of the emulated pump's oil more).
     temperature_start_c, temperature_end_c, temperature_warmup_tau_s : float
         Oil warm-up of the emulated bench: the true oil temperature (which the
         emulated pump runs at) rises from the start value towards the end value
@@ -107,6 +111,7 @@ class BenchSpec:
     flow_noise_rel: float = 0.003
     flow_noise_m3s: float = 1.0e-6
     flow_bias_m3s: float = 0.0
+    flow_meter: str = "delivery"
     temperature_start_c: float = 30.0
     temperature_end_c: float = 70.0
     temperature_warmup_tau_s: float = 90.0
@@ -128,6 +133,9 @@ class BenchSpec:
             raise InputError("wear_clearance_factor_end", self.wear_clearance_factor_end, "0 (no wear) or [0.5, 2]")
         if not (math.isfinite(self.wear_start_s) and self.wear_start_s >= 0):
             raise InputError("wear_start_s", self.wear_start_s, "[0, inf) s")
+        from gerotor_twin.hydraulics.meter import FLOW_METERS
+        if self.flow_meter not in FLOW_METERS:
+            raise InputError("flow_meter", self.flow_meter, " | ".join(FLOW_METERS))
 
     def decimation(self, rate_hz: float, field: str) -> int:
         """Ticks per published sample for a topic rate [Hz]; InputError if not a divisor."""
