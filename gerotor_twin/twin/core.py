@@ -190,18 +190,19 @@ class TwinCore:
         if accepted and kind == "delivery_flow":
             with self.book.lock:
                 last = self.book.channels["delivery_flow"].latest()
-                p_d = self.book.channels["delivery_pressure"].latest()
             if last is not None:
-                q = self._at_delivery(last[0], p_d)
+                q = last[0] if self.settings.flow_meter == "delivery" else self._at_delivery(last[0])
                 self.health.add_flow(q, receive_ns)
                 self.residual.add_flow(q, receive_ns)
         return accepted
 
-    def _at_delivery(self, q_m3s: float, p_d) -> float:
-        """A measured flow [m³/s] as the volume at the delivery pressure (``settings.flow_meter``,
-        :mod:`gerotor_twin.hydraulics.meter`): a return-line meter's reading times ρ(p_atm)/ρ(p_d) at the latest
-        delivery pressure accepted (``p_d``: its (value, ...) or None: the reading as it is)."""
-        if self.settings.flow_meter == "delivery" or p_d is None:
+    def _at_delivery(self, q_m3s: float) -> float:
+        """A return-line meter's reading [m³/s] as the same mass's volume at the delivery pressure
+        (``settings.flow_meter``, :mod:`gerotor_twin.hydraulics.meter`): times ρ(p_atm)/ρ(p_d) at the latest
+        delivery pressure accepted (none yet: the reading as it is)."""
+        with self.book.lock:
+            p_d = self.book.channels["delivery_pressure"].latest()
+        if p_d is None:
             return q_m3s
         return q_m3s * expansion(self.model.config.fluid.atmospheric_pa, p_d[0], self.model.kernel.eos)
 
