@@ -82,7 +82,8 @@ def test_the_limits_are_the_models_input_envelope(tmp_path):
         read_map(_write(tmp_path, "speed [rpm],p_delivery [bar],T_oil [degC],eta_v [-]\n"
                                   "3400,5,50,0.9\n1000,31,50,0.9\n"), lim)
     assert "speed [rpm] = '3400' is invalid; allowed: (0, 3300] rpm (the rated 3000 rpm + 10 %)" in exc.value.lines[0]
-    assert "p_delivery [bar] = '31' is invalid; allowed: [0, 30.25] bar (the rated 27.5 bar + 10 %)" in exc.value.lines[1]
+    assert ("p_delivery [bar] = '31' is invalid; allowed: [0, 30.25] bar (the rated 27.5 bar + 10 %)"
+            in exc.value.lines[1])
 
 
 def test_bad_rows_one_line_each(tmp_path, capsys):
