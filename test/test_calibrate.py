@@ -300,6 +300,8 @@ def test_cli_end_to_end(bags, tmp_path, capsys):
     assert r["params"] == ["lateral"] and r["fit"]["unseparable"] == [] and r["verdict"]["calibrated"]
     assert r["selection"]["cv"] == "speed" and r["holdout"] is None
     assert "<img" in rep.read_text() and load_config(out).calibration["model"] == "mobility"
+    assert "flow meter at the delivery pressure" in rep.read_text() and r["flow_meter"] == "delivery"
+    assert load_config(out).calibration["flow_meter"] == "delivery"
     assert main(["calibrate", "--bench", str(bag), "-o", str(out)]) == 2      # exists, no --overwrite
 
 

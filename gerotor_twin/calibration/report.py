@@ -125,7 +125,9 @@ def write_report(result: dict, path) -> Path:
 td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}</style></head><body>
 <h1>Calibration from bench recordings or a steady map</h1>
 <p>Data: {html.escape(', '.join(result['bags']))}; prior config {html.escape(result['prior_config'])}; model
-{html.escape(result['model'])}; {len(result['plateau_records'])} plateaus; {result['date']}; {html.escape(result['software'])}.</p>
+{html.escape(result['model'])}; {len(result['plateau_records'])} plateaus;
+flow meter at the {html.escape(result.get('flow_meter', 'delivery'))} pressure; {result['date']};
+{html.escape(result['software'])}.</p>
 {verdict}{params}{combos}{notes}{hold}{_selection(result.get("selection"))}
 <img alt="efficiency error per plateau" src="data:image/png;base64,{_figure(result)}">
 {plateaus}
