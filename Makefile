@@ -55,13 +55,13 @@ demo-calibrate: $(STAMP)
 	    --config out/demo-calibrate/pump_fitted.yaml --overwrite --quiet --oil-sensor-tau 3
 	$(VENV)/bin/gerotor-twin health out/demo-calibrate/wear_twin.mcap --every 4
 
-# a fault named: a 10 s bench recording (config/profiles/diagnosis.yaml) of a pump whose tooth-tip clearance
+# a fault named: a 10 s bench recording (the built-in diagnosis profile) of a pump whose tooth-tip clearance
 # opens to 2.5 x over the run, the twin (config/pump.yaml) over it with the health monitor, then its alarms,
 # each with the fault the classifier named and its probability, and the report with the fault timeline beside
 # the health plots (out/demo-diagnose/report.html; about 40 s on 2 cores)
 DIAGNOSE := out/demo-diagnose
 demo-diagnose: $(STAMP)
-	$(VENV)/bin/gerotor-twin synth-bench --profile-file config/profiles/diagnosis.yaml --clearance-factor 1.0 \
+	$(VENV)/bin/gerotor-twin synth-bench --profile diagnosis --clearance-factor 1.0 \
 	    --fault tip_wear --fault-to 2.5 --seed 1 -o $(DIAGNOSE)/bench_tip_wear.mcap --overwrite
 	$(VENV)/bin/gerotor-twin run-bag $(DIAGNOSE)/bench_tip_wear.mcap -o $(DIAGNOSE)/twin.mcap --overwrite --quiet \
 	    --health window_s=0.5 --health settle_s=0.5

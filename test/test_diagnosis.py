@@ -17,7 +17,7 @@ from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, KIND_CODES, S
                                          operating_points, point_key)
 from gerotor_twin.twin.health import alarm_records
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
-                                                 main as bench_main, model_records)
+                                                 main as bench_main, model_records, reference_loss, severity_for)
 
 REL_SD = 0.003          #: the monitor's model-error floor (HealthSettings.model_sd_rel)
 
@@ -200,10 +200,28 @@ def test_bench_counts_alarms_not_bags():
     assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"]) == (3, 3, 2)
 
 
+def test_bench_severity_reaches_its_loss(plant):
+    """Behaviour: the bench's severity of a flow kind is the value whose apparent loss at the monitor's reference
+    point is the target (within the rounding to three significant digits of the fault's step), inside the kind's
+    allowed range; a target the range cannot reach gives the range's end with its smaller loss (a −5 bar offset
+    loses 6.8 pt on the default pump, not 8); the meter gain g is −target / η_v (closed form)."""
+    cfg, _ = plant
+    v, loss = severity_for(cfg, "lateral_wear", 0.04)
+    assert 1.0 < v < 3.0 and loss == pytest.approx(0.04, abs=0.002)
+    assert loss == pytest.approx(reference_loss(cfg, "lateral_wear", [v])[0], rel=1e-12)
+    v, loss = severity_for(cfg, "pressure_offset", 0.08)
+    assert v == -5e5 and 0.02 < loss < 0.08
+    g, loss = severity_for(cfg, "flowmeter_drift", 0.04)
+    eta = reference_loss(cfg, "flowmeter_drift", [-1.0])[0]
+    assert g == pytest.approx(-0.04 / eta, rel=1e-3) and loss == pytest.approx(-g * eta, rel=1e-12)
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--severity", "mid"], "--severity = 'mid' is invalid; allowed: high | low | both"),
     (["--seeds", "1,x"], "--seeds = '1,x' is invalid; allowed: comma-separated"),
-    (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s")])
+    (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s"),
+    (["--config", "/nonexistent/pump.yaml"], "--config = '/nonexistent/pump.yaml' is invalid"),
+    (["--profile-file", "/nonexistent/profile.yaml"], "--profile-file = '/nonexistent/profile.yaml' is invalid")])
 def test_bench_bad_input(tmp_path, capsys, argv, message):
     """Bad input: the bench refuses a bad option in one line naming it, the value and the allowed range (exit 2)
     before any bag is made."""

@@ -119,8 +119,8 @@ def add_parser(sub) -> None:
                        description="Run the bench emulator (a pump that differs from the twin on purpose, "
                                    "seen through bench sensors) along a profile and record the bench "
                                    "topics to a rosbag2-convention MCAP file. Same seed -> same bytes.")
-    p.add_argument("--profile", help="built-in profile, scaled to the pump's range: map | transient | wear | test "
-                                     "(default transient)")
+    p.add_argument("--profile", help="built-in profile, scaled to the pump's range: map | transient | wear | diagnosis "
+                                     "| test (default transient)")
     p.add_argument("--profile-file", metavar="F",
                    help="a profile YAML file instead (segments of duration_s, rpm, bar, optional ramp and "
                         "oil_temperature_c; docs/offline.md, config/profiles/example.yaml)")

@@ -23,6 +23,9 @@ scaled to the pump's range by :func:`scale_to_range`:
 ``wear``       durability cycle for the wear scenario: 1500 rpm / 20 bar (8 s), then
                three times 2500 rpm / 10 bar and back (1 s ramps, 7 s holds), ending at
                2000 rpm / 15 bar; 64 s (use with ``--wear-to``)
+``diagnosis``  the fault classifier's four plateaus: 1000 / 2500 rpm × 5 / 25 bar,
+               2.5 s each at 50 °C oil; 10 s (``config/profiles/diagnosis.yaml``,
+               written for the reference range like the others)
 ``test``       0.4 s at 1000 rpm with a pressure step (unit tests)
 =============  ==============================================================
 
@@ -261,11 +264,20 @@ def _test_segments() -> list[tuple]:
     return [(0.2, 1000, 10, False), (0.2, 1000, 15, False)]
 
 
+def _diagnosis_segments() -> list[tuple]:
+    """The segments of ``config/profiles/diagnosis.yaml`` (duration, rpm, bar, ramp, oil [°C])."""
+    from gerotor_twin.resources import resource_path
+    from .profile_file import load_profile_file
+    prof = load_profile_file(resource_path("config", "profiles", "diagnosis.yaml"))
+    return [(s.duration_s, s.rpm, s.bar, s.ramp, s.oil_temperature_c) for s in prof.segments]
+
+
 #: name → (segments on the reference range, description)
 PROFILES = {
     "map": (_map_segments, "speed/pressure map: 3 speeds x 4 pressures, 10 s plateaus, 2 s ramps"),
     "transient": (_transient_segments, "speed ramp 1000->2500 rpm, pressure steps 10->20->5 bar, ramp down"),
     "wear": (_wear_segments, "durability cycle 1500/20 <-> 2500/10 (7 s holds, 1 s ramps), 64 s"),
+    "diagnosis": (_diagnosis_segments, "fault diagnosis: 1000/2500 rpm x 5/25 bar, 2.5 s each, oil 50 C, 10 s"),
     "test": (_test_segments, "unit-test profile"),
 }
 
@@ -279,7 +291,7 @@ def get_profile(name: str, limits: OperatingRange | None = None) -> Profile:
     make, description = PROFILES[name]
     rows = make()
     if limits != REFERENCE_RANGE:      # on the reference range as written (scale_to_range: the identity there)
-        rows = [(d, *scale_to_range(rpm, bar, limits), ramp) for d, rpm, bar, ramp in rows]
+        rows = [(d, *scale_to_range(rpm, bar, limits), *rest) for d, rpm, bar, *rest in rows]
         description += (f" (scaled to 0-{limits.max_speed_rpm:g} rpm, 0-{limits.max_delivery_bar:g} bar"
                         + (f", from {limits.min_speed_rpm:g} rpm" if limits.min_speed_rpm is not None else "") + ")")
     return Profile(name, tuple(Segment(*row) for row in rows), description, limits)

@@ -1,11 +1,16 @@
 """Fault classifier over emulated fault bags: per bag, per alarm and the detection delays (a measurement, not a test).
 
-``python -m gerotor_twin.offline.diagnosis_bench [-o DIR] [--seeds 1,2] [--severity high|low|both] [--ramp S]``
-makes one short bag per fault kind, seed and severity with ``synth-bench`` (each kind alone; emulated pump
-at clearance factor 1.0 against the twin's ``config/pump.yaml``; the fault ramps linearly from none at the
-start to its severity at ``--ramp`` s, default the bag's length, 0: a step), runs the twin over it
-(``run-bag``, health windows of 0.5 s after 0.5 s of settling) and reports, with a line per bag as it goes:
+``python -m gerotor_twin.offline.diagnosis_bench [-o DIR] [--config PUMP] [--seeds 1,2] [--severity high|low|both]
+[--ramp S]`` makes one short bag per fault kind, seed and severity with ``synth-bench`` (the built-in
+``diagnosis`` profile scaled to the pump's range; each kind alone; emulated pump at clearance factor 1.0
+against the twin of the same config, by default the packaged ``config/pump.yaml``; the fault ramps linearly
+from none at the start to its severity at ``--ramp`` s, default the bag's length, 0: a step), runs the twin
+over it (``run-bag``, health windows of 0.5 s after 0.5 s of settling) and reports, with a line per bag as it
+goes:
 
+* the severities, solved on the pump for the flow kinds: the value at which the fault's apparent loss at the
+  health monitor's reference point is :data:`TARGET_LOSS` (4 pt low, 8 pt high; :func:`severity_for`), or the
+  end of the kind's allowed range with the loss it reaches there;
 * per bag, the fault named at the last health update against the true kind (a confusion table);
 * per alarm (``alarm_records``: each WARN / ERROR interval, named at its last update), the fraction naming
   the true kind, per kind and over all fault bags, how many of those named it already at their first update,
@@ -35,12 +40,12 @@ import numpy as np
 
 from ..cli import main as cli_main
 from ..errors import InputError, check_range
-from ..resources import resource_path
 from ..twin.diagnosis import KINDS, WindowRecord
 from ..twin.health import LEVELS, alarm_records, fault_name
 from .health_log import load_health
 
-__all__ = ["PROFILE", "profile_s", "LOSS_PT", "CASES", "reference_loss", "crossing_time", "truth_crossing",
+__all__ = ["profile_s", "LOSS_PT", "CASES", "TARGET_LOSS", "FIXED_SEVERITY", "severity_for", "severities",
+           "reference_loss", "crossing_time", "truth_crossing",
            "first_named_alarm", "run_case", "confusion", "alarm_summary", "alarm_table", "main", "model_records",
            "MODEL_CASES", "POINTS"]
 
@@ -103,24 +108,58 @@ def model_windows_table() -> str:
     return "\n".join(lines)
 
 
-#: the bags' profile: four plateaus of 2.5 s at 50 °C, two speeds × two delivery pressures (1000 / 2500 rpm ×
-#: 5 / 25 bar, the operating points of :data:`POINTS`)
-PROFILE = resource_path("config", "profiles", "diagnosis.yaml")
 #: loss of volumetric efficiency at the monitor's reference point from which the detection delay counts [-]
 LOSS_PT = 0.02
 
-#: true kind → (low, high) severity (``--fault-to``; healthy: none), reached at the end of the ramp: at the
-#: reference point (1500 rpm, 20 bar, 50 °C) the apparent loss at full severity is 4–10 pt for the flow kinds
-#: (:func:`reference_loss`); a suction restriction and a speed dropout leave the measured flow as predicted
-CASES = {"healthy": (None, None), "tip_wear": (2.0, 2.5), "lateral_wear": (1.05, 1.1),
-         "air_ingress": (0.05, 0.08), "pressure_offset": (-3e5, -5e5), "flowmeter_drift": (-0.05, -0.1),
-         "speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
+#: apparent loss of volumetric efficiency at the monitor's reference point that a flow kind's (low, high)
+#: severity reaches at the end of its ramp [-]: each pump gets the severities that make it (:func:`severity`)
+TARGET_LOSS = (0.04, 0.08)
+#: the kinds that leave the measured flow as predicted → (low, high) severity (``--fault-to``)
+FIXED_SEVERITY = {"speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
+#: the kinds of the bags, healthy first
+CASES = ("healthy", "tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift",
+         "speed_dropout", "suction_restriction")
 
 
-def profile_s() -> float:
-    """Length of :data:`PROFILE` [s] (the default ramp: a fault reaches its severity at the bag's end)."""
+def profile_s(profile_file: str | None = None) -> float:
+    """Length [s] of the ``diagnosis`` profile or of ``profile_file`` (the default ramp: a fault reaches its
+    severity at the bag's end)."""
     from ..bench_emulator.profile_file import load_profile_file
-    return load_profile_file(PROFILE).duration_s
+    from ..bench_emulator.profiles import get_profile
+    return (get_profile("diagnosis") if profile_file is None else load_profile_file(profile_file)).duration_s
+
+
+def severity_for(cfg, kind: str, target: float = TARGET_LOSS[1], settings=None) -> tuple[float, float]:
+    """The severity of ``kind`` whose apparent loss at the monitor's reference point is ``target`` [-] on the
+    pump ``cfg``, and that loss [-] (:func:`reference_loss`).
+
+    Solved by Brent's method between no fault and the end of the kind's allowed range in the direction that
+    loses flow (:data:`~gerotor_twin.bench_emulator.faults.FAULT_KINDS`: a wear × 3, 10 % of free air, an
+    offset of −5 bar but no lower than the reference pressure read as 0 bar gauge, a gain of −0.5); the meter
+    gain g in closed form, −g·η_v = target.  Where even the end
+    of the range loses less (a low-pressure pump's tip wear), that end, with the loss it reaches.  Rounded to
+    three significant digits of its distance from no fault, so a table can quote it.
+    """
+    from scipy.optimize import brentq
+    from ..bench_emulator.faults import FAULT_KINDS
+    from ..twin.health import HealthSettings
+    fk = FAULT_KINDS[kind]
+    none = cfg.air.air_fraction if fk.none is None else fk.none
+    far = {"pressure_offset": max(fk.lo, -(settings or HealthSettings()).within(cfg.range).reference_bar * 1e5),
+           "flowmeter_drift": fk.lo}.get(kind, fk.hi)
+
+    def loss(v):
+        return float(reference_loss(cfg, kind, [v], settings)[0])
+
+    if kind == "flowmeter_drift":
+        v = -target / loss(-1.0)                   # loss(g) = −g·η_v
+    elif loss(far) <= target:
+        v = far
+    else:
+        v = brentq(lambda x: loss(x) - target, none, far, xtol=1e-4 * abs(far - none))
+    step = v - none
+    v = none + float(f"{step:.3g}")
+    return v, loss(v)
 
 
 def reference_loss(cfg, kind: str, values, settings=None) -> np.ndarray:
@@ -146,8 +185,8 @@ def reference_loss(cfg, kind: str, values, settings=None) -> np.ndarray:
     from ..model.pump import PumpModel
     from ..model.steady import run_steady
     from ..twin.health import HealthSettings
-    s = settings or HealthSettings()
-    rpm, oil = min(s.reference_rpm, cfg.range.max_speed_rpm), s.reference_oil_c + 273.15
+    s = (settings or HealthSettings()).within(cfg.range)
+    rpm, oil = s.reference_rpm, s.reference_oil_c + 273.15
     p_s = cfg.boundary.suction_pressure_pa
 
     def eta(c=cfg, bar=s.reference_bar, ps=p_s):
@@ -201,9 +240,11 @@ def first_named_alarm(t, rows, kind: str) -> float | None:
                  and fault_name(r) == kind), None)
 
 
-def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float) -> dict:
+def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float, config_path: str | None = None,
+             profile_file: str | None = None) -> dict:
     """One bag of ``kind`` reaching severity ``to`` [the kind's unit] over ``ramp_s`` [s] from the start, noise
-    ``seed``, and the twin over it.
+    ``seed``, on the pump ``cfg`` (read from ``config_path``; None: the packaged default pump) along the
+    ``diagnosis`` profile or ``profile_file``, and the twin over it.
 
     Returns
     -------
@@ -213,12 +254,14 @@ def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float) -> dict:
         None without a fault); ``first_right_s`` [s] (:func:`first_named_alarm`) and ``delay_s`` [s] from the
         crossing (None when either is).
     """
-    tag = f"{kind}_{to}_{seed}"
+    tag = f"{kind}_{to:.4g}_{seed}" if to is not None else f"{kind}_{seed}"
     bag, twin = out / f"{tag}.mcap", out / f"{tag}_twin.mcap"
     fault = [] if to is None else ["--fault", kind, "--fault-to", f"{to:g}", "--fault-ramp", f"{ramp_s:g}"]
-    argv = ["synth-bench", "--profile-file", str(PROFILE), "--clearance-factor", "1.0", "--seed",
+    pump = [] if config_path is None else ["--config", str(config_path)]
+    profile = ["--profile", "diagnosis"] if profile_file is None else ["--profile-file", str(profile_file)]
+    argv = ["synth-bench", *profile, *pump, "--clearance-factor", "1.0", "--seed",
             str(seed), "-o", str(bag), "--overwrite", "--quiet", *fault]
-    if cli_main(argv) or cli_main(["run-bag", str(bag), "-o", str(twin), "--overwrite", "--quiet",
+    if cli_main(argv) or cli_main(["run-bag", str(bag), *pump, "-o", str(twin), "--overwrite", "--quiet",
                                    "--health", "window_s=0.5", "--health", "settle_s=0.5"]):
         raise RuntimeError(f"{kind} {to} seed {seed}: a command failed")
     t, rows = load_health(twin)
@@ -286,34 +329,51 @@ def alarm_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def _cases(seeds: str, severity: str) -> list[tuple[str, float | None, int]]:
-    """(kind, severity, seed) of every bag: ``seeds`` comma-separated integers, ``severity`` high | low | both."""
-    try:
-        seed_list = [int(s) for s in seeds.split(",")]
-    except ValueError:
-        raise InputError("--seeds", seeds, "comma-separated integers") from None
+def severities(cfg, severity: str, progress=None) -> dict[str, list]:
+    """kind → the severities of its bags on the pump ``cfg`` (``severity``: high | low | both): the flow kinds'
+    solved for :data:`TARGET_LOSS` (:func:`severity`), the others :data:`FIXED_SEVERITY`; healthy: [None].
+    ``progress``: a stream for one line per kind."""
     pick = {"high": (1,), "low": (0,), "both": (0, 1)}
     if severity not in pick:
         raise InputError("--severity", severity, " | ".join(pick))
-    out = []
-    for kind, tos in CASES.items():
-        levels = (None,) if tos[0] is None else tuple(tos[i] for i in pick[severity])
-        out += [(kind, to, seed) for to in levels for seed in seed_list]
+    out = {"healthy": [None]}
+    for kind in CASES[1:]:
+        if kind in FIXED_SEVERITY:
+            out[kind] = [FIXED_SEVERITY[kind][i] for i in pick[severity]]
+            continue
+        solved = [severity_for(cfg, kind, TARGET_LOSS[i]) for i in pick[severity]]
+        out[kind] = [v for v, _ in solved]
+        if progress is not None:
+            print(f"  {kind}: " + ", ".join(f"{v:.4g} (loss {100 * l:.2f} pt)" for v, l in solved),
+                  file=progress, flush=True)
     return out
 
 
-def run_bags(out: Path, cases, ramp_s: float) -> list[dict]:
+def _seeds(seeds: str) -> list[int]:
+    """``--seeds``: comma-separated integers."""
+    try:
+        return [int(s) for s in seeds.split(",")]
+    except ValueError:
+        raise InputError("--seeds", seeds, "comma-separated integers") from None
+
+
+def _cases(seeds: str, sev: dict[str, list]) -> list[tuple[str, float | None, int]]:
+    """(kind, severity, seed) of every bag: ``seeds`` comma-separated integers, ``sev`` from :func:`severities`."""
+    return [(kind, to, seed) for kind in CASES for to in sev[kind] for seed in _seeds(seeds)]
+
+
+def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = None,
+             profile_file: str | None = None) -> list[dict]:
     """:func:`run_case` over ``cases`` ((kind, severity, seed)) into ``out``, one progress line per bag."""
-    from ..config import load_config
-    cfg = load_config()
     out.mkdir(parents=True, exist_ok=True)
     results, t0 = [], time.time()
     for i, (kind, to, seed) in enumerate(cases, 1):
-        r = run_case(cfg, kind, to, seed, out, ramp_s)
+        r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file)
         results.append(r)
         alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {a['fault']}" for a in r["alarms"])
         cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
-        print(f"[{i}/{len(cases)} {time.time() - t0:4.0f} s] {kind:20s} {to!s:8s} seed {seed}: last {r['named']} "
+        sev = "-" if to is None else f"{to:.4g}"
+        print(f"[{i}/{len(cases)} {time.time() - t0:4.0f} s] {kind:20s} {sev:8s} seed {seed}: last {r['named']} "
               f"({r['confidence']:.2f}); 2 pt at {cross}; alarms: {alarms or 'none'}", flush=True)
     return results
 
@@ -327,22 +387,37 @@ def main(argv=None) -> int:
     p.add_argument("--ramp", type=float, default=None,
                    help="seconds from the start until a fault reaches its severity (default: the bag's length, 10 s; "
                         "0: a step)")
+    p.add_argument("--config", default=None,
+                   help="the pump (twin and emulated pump, a pump YAML; default the packaged config/pump.yaml): the "
+                        "profile is scaled to its range and each flow kind's severity solved for its loss")
+    p.add_argument("--profile-file", default=None, metavar="F",
+                   help="a profile YAML file instead of the built-in diagnosis profile (taken as written)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
     args = p.parse_args(argv)
     if args.model_windows:
         print(model_windows_table())
         return 0
+    from ..bench_emulator.profile_file import load_profile_file
+    from ..config import load_config
     try:
-        ramp_s = profile_s() if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
-        cases = _cases(args.seeds, args.severity)
+        cfg = load_config(args.config)
+        length = profile_s(args.profile_file)
+        if args.profile_file is not None:
+            load_profile_file(args.profile_file, cfg.range)          # inside the pump's range, or refused here
+        ramp_s = length if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
+        _seeds(args.seeds)
+        print(f"severities on {args.config or 'the default pump'} (the apparent loss at the health monitor's "
+              f"reference point when reached):", flush=True)
+        sev = severities(cfg, args.severity, progress=sys.stdout)
     except InputError as e:
         p.error(str(e))
     t0, out = time.time(), Path(args.out)
-    results = run_bags(out, cases, ramp_s)
+    results = run_bags(out, _cases(args.seeds, sev), ramp_s, cfg, args.config, args.profile_file)
     summary = alarm_summary(results)
     (out / "results.json").write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
-                                                  "results": results, "summary": summary}, indent=1))
+                                                  "severities": sev, "results": results, "summary": summary},
+                                                 indent=1))
     print(confusion(results), "", alarm_table(summary), sep="\n")
     print(f"{len(results)} bags in {time.time() - t0:.0f} s; wrote {out / 'results.json'}")
     return 0

@@ -190,6 +190,12 @@ class HealthSettings:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def within(self, limits) -> "HealthSettings":
+        """These settings with the reference point inside the pump's range ``limits`` (an ``OperatingRange``:
+        the speed and delivery pressure each capped at its maximum; a 6-bar lube pump's reference is 6 bar)."""
+        return replace(self, reference_rpm=min(self.reference_rpm, limits.max_speed_rpm),
+                       reference_bar=min(self.reference_bar, limits.max_delivery_bar))
+
 
 def clearance_exponent(model, settings: HealthSettings, step: float = 1.1) -> float:
     """Exponent n of the flow loss against a common clearance scale c at the reference point, L ∝ cⁿ [-].
@@ -230,10 +236,11 @@ def reference_loss(model, settings: HealthSettings) -> tuple[float, float]:
     """
     from gerotor_twin.units import celsius_to_kelvin
     from gerotor_twin.model.steady import run_steady
-    rpm = min(settings.reference_rpm, model.config.range.max_speed_rpm)
+    settings = settings.within(model.config.range)
     t_model = getattr(model, "temperature_k", None)
     try:
-        res = run_steady(model, rpm, settings.reference_bar, oil_temperature=celsius_to_kelvin(settings.reference_oil_c))
+        res = run_steady(model, settings.reference_rpm, settings.reference_bar,
+                         oil_temperature=celsius_to_kelvin(settings.reference_oil_c))
     finally:
         if t_model is not None:
             model.set_temperature(t_model)          # the live model's properties stay where they were
@@ -272,10 +279,7 @@ class HealthMonitor:
         self.background = background
         self._pool = None           # the worker (background), created on the first classification
         self._jobs: collections.deque = collections.deque()    # its classifications not yet collected (Futures)
-        s = settings or HealthSettings()
-        rng = model.config.range          # the reference point inside the pump's range (a 6-bar lube pump: 6 bar)
-        self.settings = s = replace(s, reference_rpm=min(s.reference_rpm, rng.max_speed_rpm),
-                                    reference_bar=min(s.reference_bar, rng.max_delivery_bar))
+        self.settings = s = (settings or HealthSettings()).within(model.config.range)
         self.base_config = model.config
         self.k_applied = 1.0
         ref = model.replica() if s.enabled else None     # the live model is written by the twin's steps only
