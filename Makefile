@@ -55,7 +55,7 @@ demo-calibrate: $(STAMP)
 	    --config out/demo-calibrate/pump_fitted.yaml --overwrite --quiet --oil-sensor-tau 3
 	$(VENV)/bin/gerotor-twin health out/demo-calibrate/wear_twin.mcap --every 4
 
-# a fault named: a 10 s bench recording (the built-in diagnosis profile) of a pump whose tooth-tip clearance
+# a fault named: a 20 s bench recording (the built-in diagnosis profile) of a pump whose tooth-tip clearance
 # opens to 2.5 x over the run, the twin (config/pump.yaml) over it with the health monitor, then its alarms,
 # each with the fault the classifier named and its probability, and the report with the fault timeline beside
 # the health plots (out/demo-diagnose/report.html; about 40 s on 2 cores)

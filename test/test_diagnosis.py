@@ -143,6 +143,21 @@ def test_suction_restriction(plant, restriction_pa):
     assert d.confidence > 0.9
 
 
+def test_growing_suction_restriction_seen_twice(plant):
+    """Behaviour: a restriction that grows between two visits of the four operating points (10 kPa at 68 L/min on
+    the first, 50 kPa on the second, 6 s later) is named with the restriction's growth in time (its drop ∝ flow²
+    with a coefficient b₀ + b₁·τ); without the trend a constant b fits neither visit and the flow's healthy
+    explanation wins."""
+    import dataclasses
+    cfg, sig = plant
+    first = _records(cfg, {}, restriction_pa=1e4, seed=1)
+    second = [dataclasses.replace(r, t_s=r.t_s + 6.0) for r in _records(cfg, {}, restriction_pa=5e4, seed=2)]
+    recs = first + second
+    d = classify(recs, [sig(r) for r in recs])
+    assert d.kind == "suction_restriction" and d.confidence > 0.9, d.probability
+    assert classify(recs, [sig(r) for r in recs], DiagnosisSettings(trend=False)).kind == "healthy"
+
+
 def test_one_operating_point_names_no_kind(plant):
     """Behaviour: at one operating point every kind fits the one residual: a fault, kind "unknown", with the
     probability of a fault; a healthy pump is still "healthy"."""

@@ -24,8 +24,9 @@ scaled to the pump's range by :func:`scale_to_range`:
                three times 2500 rpm / 10 bar and back (1 s ramps, 7 s holds), ending at
                2000 rpm / 15 bar; 64 s (use with ``--wear-to``)
 ``diagnosis``  the fault classifier's four plateaus: 1000 / 2500 rpm × 5 / 25 bar,
-               2.5 s each at 50 °C oil; 10 s (``config/profiles/diagnosis.yaml``,
-               written for the reference range like the others)
+               2.5 s each at 50 °C oil, the four visited twice; 20 s
+               (``config/profiles/diagnosis.yaml``, written for the reference range
+               like the others)
 ``test``       0.4 s at 1000 rpm with a pressure step (unit tests)
 =============  ==============================================================
 
@@ -277,7 +278,8 @@ PROFILES = {
     "map": (_map_segments, "speed/pressure map: 3 speeds x 4 pressures, 10 s plateaus, 2 s ramps"),
     "transient": (_transient_segments, "speed ramp 1000->2500 rpm, pressure steps 10->20->5 bar, ramp down"),
     "wear": (_wear_segments, "durability cycle 1500/20 <-> 2500/10 (7 s holds, 1 s ramps), 64 s"),
-    "diagnosis": (_diagnosis_segments, "fault diagnosis: 1000/2500 rpm x 5/25 bar, 2.5 s each, oil 50 C, 10 s"),
+    "diagnosis": (_diagnosis_segments, "fault diagnosis: 1000/2500 rpm x 5/25 bar, 2.5 s each, visited twice, "
+                                       "oil 50 C, 20 s"),
     "test": (_test_segments, "unit-test profile"),
 }
 

@@ -385,7 +385,7 @@ def main(argv=None) -> int:
     p.add_argument("--seeds", default="1", help="noise seeds, comma-separated (default 1)")
     p.add_argument("--severity", default="high", help="high | low | both severities of each kind (default high)")
     p.add_argument("--ramp", type=float, default=None,
-                   help="seconds from the start until a fault reaches its severity (default: the bag's length, 10 s; "
+                   help="seconds from the start until a fault reaches its severity (default: the bag's length, 20 s; "
                         "0: a step)")
     p.add_argument("--config", default=None,
                    help="the pump (twin and emulated pump, a pump YAML; default the packaged config/pump.yaml): the "

@@ -289,36 +289,46 @@ class SpeedCounter:
         return len(inside), int(round((end_ns - start_ns) / period))
 
 
-def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float) -> tuple[float, float]:
+def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float, trend: bool = False) -> tuple[float, float]:
     """Log-likelihood ratio of a suction restriction against none, from the windows' suction pressures.
 
     Without restriction p_s = c − a·ω² (the suction line's drop ∝ speed²); a restriction adds − b·q²
     (its drop ∝ the intake flow², here the measured delivery flow, which at one speed falls with the
-    delivery pressure).  Both fitted by least squares with a common noise σ profiled out, its variance
-    floored at ``sd_floor_pa``² [Pa²]; the ratio carries the Occam factor ½·ln(1 + P_b / var b̂) of a
-    Gaussian prior on b with standard deviation ``prior_pa`` [Pa] / (largest theoretical flow)².
+    delivery pressure), with ``trend`` b = b₀ + b₁·τ (a restriction that grows, as the flow kinds' θ may; τ
+    the time since the first window).  Both fitted by least squares with a common noise σ profiled out, its
+    variance floored at ``sd_floor_pa``² [Pa²]; the ratio carries the Occam factor ½·ln(1 + P_k / var k̂) of
+    each restriction coefficient k, Gaussian priors with standard deviation P_b₀^½ = ``prior_pa`` [Pa] /
+    (largest theoretical flow)² and P_b₁^½ = P_b₀^½ / T (T the windows' time span: b may cross its prior
+    range within them, as the flow kinds' growth rate).
 
     Returns
     -------
     tuple of float
         Log-likelihood ratio [-] (−inf when the suction pressure never varies: no sensor) and the fitted
-        b [Pa·s²/m⁶] (0 with fewer than 4 windows).
+        b at the last window [Pa·s²/m⁶] (0 with fewer than 4 windows, or 5 with the trend).
     """
     n = len(records)
     y = np.array([r.p_suction for r in records])
+    t = np.array([r.t_s for r in records]) - records[0].t_s if n else np.zeros(0)
+    span = float(t[-1]) if n else 0.0
+    trend = trend and span > 0.0 and n >= 5
     if n < 4 or np.ptp(y) == 0.0:
         return -math.inf, 0.0
     x0 = np.column_stack([np.ones(n), -np.array([r.omega for r in records]) ** 2])
-    x1 = np.column_stack([x0, -np.array([r.q_meas for r in records]) ** 2])
+    q2 = -np.array([r.q_meas for r in records]) ** 2
+    x1 = np.column_stack([x0, q2, q2 * t] if trend else [x0, q2])
     rss = []
     for x in (x0, x1):
         coef = np.linalg.lstsq(x, y, rcond=None)[0]
         rss.append(float(np.sum((y - x @ coef) ** 2)) + n * sd_floor_pa ** 2)
     col = np.abs(x1).max(axis=0)
     col[col == 0] = 1.0                                                  # columns scaled: ω² ~ 1e5, q² ~ 1e-6
-    var_b = rss[1] / n * float(np.linalg.pinv((x1 / col).T @ (x1 / col))[2, 2]) / col[2] ** 2
+    cov = rss[1] / n * np.linalg.pinv((x1 / col).T @ (x1 / col)) / np.outer(col, col)
     prior_b = (prior_pa / max(r.q_th for r in records) ** 2) ** 2
-    return 0.5 * n * math.log(rss[0] / rss[1]) - 0.5 * math.log1p(prior_b / max(var_b, 1e-300)), float(coef[2])
+    priors = (prior_b, prior_b / span ** 2) if trend else (prior_b,)
+    occam = sum(0.5 * math.log1p(pk / max(float(cov[2 + i, 2 + i]), 1e-300)) for i, pk in enumerate(priors))
+    b_last = float(coef[2] + (coef[3] * span if trend else 0.0))
+    return 0.5 * n * math.log(rss[0] / rss[1]) - occam, b_last
 
 
 def missing_fraction(records) -> float:
@@ -403,7 +413,8 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
         if _SIGN[kind] and th * _SIGN[kind] < -s.sign_sd * th_sd:
             continue                                    # the fault cannot move the flow that way
         ll[kind] = ll_k
-    ll["suction_restriction"], theta["suction_restriction"] = suction_log_ratio(recs, s.suction_sd_pa, s.suction_prior_pa)
+    ll["suction_restriction"], theta["suction_restriction"] = suction_log_ratio(recs, s.suction_sd_pa,
+                                                                               s.suction_prior_pa, s.trend)
     ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
     chi2["suction_restriction"] = chi2["healthy"]
     kind, prob, best = _decide(ll, chi2, recs, s)
