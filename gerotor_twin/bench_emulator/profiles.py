@@ -266,11 +266,13 @@ def _test_segments() -> list[tuple]:
 
 
 def _diagnosis_segments() -> list[tuple]:
-    """The segments of ``config/profiles/diagnosis.yaml`` (duration, rpm, bar, ramp, oil [°C])."""
-    from gerotor_twin.resources import resource_path
-    from .profile_file import load_profile_file
-    prof = load_profile_file(resource_path("config", "profiles", "diagnosis.yaml"))
-    return [(s.duration_s, s.rpm, s.bar, s.ramp, s.oil_temperature_c) for s in prof.segments]
+    """The fault classifier's profile (duration, rpm, bar, ramp, oil [°C]): two speeds × two delivery pressures at
+    50 °C oil, the four points visited twice, so that a fault growing in time is not the same columns as a loss
+    that depends on the operating point (docs/calibration_health.md, "Fault diagnosis"); the same segments as
+    ``config/profiles/diagnosis.yaml``, the file form to copy (a test holds them equal)."""
+    first = [(2.5, 1000, 5, False, 50.0), (2.5, 1000, 25, False, None), (2.5, 2500, 25, False, None),
+             (2.5, 2500, 5, False, None)]
+    return first + [first[0][:4] + (None,)] + first[1:]
 
 
 #: name → (segments on the reference range, description)
