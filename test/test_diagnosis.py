@@ -236,7 +236,8 @@ def test_bench_severity_reaches_its_loss(plant):
     (["--seeds", "1,x"], "--seeds = '1,x' is invalid; allowed: comma-separated"),
     (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s"),
     (["--config", "/nonexistent/pump.yaml"], "--config = '/nonexistent/pump.yaml' is invalid"),
-    (["--profile-file", "/nonexistent/profile.yaml"], "--profile-file = '/nonexistent/profile.yaml' is invalid")])
+    (["--profile-file", "/nonexistent/profile.yaml"], "--profile-file = '/nonexistent/profile.yaml' is invalid"),
+    (["--settle", "-1"], "--settle = -1.0 is invalid; allowed: [0, 600] s")])
 def test_bench_bad_input(tmp_path, capsys, argv, message):
     """Bad input: the bench refuses a bad option in one line naming it, the value and the allowed range (exit 2)
     before any bag is made."""

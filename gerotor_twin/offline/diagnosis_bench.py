@@ -5,7 +5,7 @@
 ``diagnosis`` profile scaled to the pump's range; each kind alone; emulated pump at clearance factor 1.0
 against the twin of the same config, by default the packaged ``config/pump.yaml``; the fault ramps linearly
 from none at the start to its severity at ``--ramp`` s, default the bag's length, 0: a step), runs the twin
-over it (``run-bag``, health windows of 0.5 s after 0.5 s of settling) and reports, with a line per bag as it
+over it (``run-bag``, health windows of 0.5 s after 0.5 s of settling, ``--settle``) and reports, with a line per bag as it
 goes:
 
 * the severities, solved on the pump for the flow kinds: the value at which the fault's apparent loss at the
@@ -240,8 +240,13 @@ def first_named_alarm(t, rows, kind: str) -> float | None:
                  and fault_name(r) == kind), None)
 
 
+#: the health monitor's windows in the bags [s]: ``window_s`` and ``settle_s`` (the speed and pressure steady this
+#: long first; ≥ 5 time constants of the bench's flow meter, 0.2 s on the default bench, HealthSettings)
+WINDOW_S, SETTLE_S = 0.5, 0.5
+
+
 def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float, config_path: str | None = None,
-             profile_file: str | None = None) -> dict:
+             profile_file: str | None = None, settle_s: float = SETTLE_S) -> dict:
     """One bag of ``kind`` reaching severity ``to`` [the kind's unit] over ``ramp_s`` [s] from the start, noise
     ``seed``, on the pump ``cfg`` (read from ``config_path``; None: the packaged default pump) along the
     ``diagnosis`` profile or ``profile_file``, and the twin over it.
@@ -262,7 +267,7 @@ def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float, config_pat
     argv = ["synth-bench", *profile, *pump, "--clearance-factor", "1.0", "--seed",
             str(seed), "-o", str(bag), "--overwrite", "--quiet", *fault]
     if cli_main(argv) or cli_main(["run-bag", str(bag), *pump, "-o", str(twin), "--overwrite", "--quiet",
-                                   "--health", "window_s=0.5", "--health", "settle_s=0.5"]):
+                                   "--health", f"window_s={WINDOW_S:g}", "--health", f"settle_s={settle_s:g}"]):
         raise RuntimeError(f"{kind} {to} seed {seed}: a command failed")
     t, rows = load_health(twin)
     crossing, loss_end = (None, 0.0) if to is None else truth_crossing(cfg, bag, kind)
@@ -363,12 +368,12 @@ def _cases(seeds: str, sev: dict[str, list]) -> list[tuple[str, float | None, in
 
 
 def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = None,
-             profile_file: str | None = None) -> list[dict]:
+             profile_file: str | None = None, settle_s: float = SETTLE_S) -> list[dict]:
     """:func:`run_case` over ``cases`` ((kind, severity, seed)) into ``out``, one progress line per bag."""
     out.mkdir(parents=True, exist_ok=True)
     results, t0 = [], time.time()
     for i, (kind, to, seed) in enumerate(cases, 1):
-        r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file)
+        r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file, settle_s)
         results.append(r)
         alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {a['fault']}" for a in r["alarms"])
         cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
@@ -392,6 +397,9 @@ def main(argv=None) -> int:
                         "profile is scaled to its range and each flow kind's severity solved for its loss")
     p.add_argument("--profile-file", default=None, metavar="F",
                    help="a profile YAML file instead of the built-in diagnosis profile (taken as written)")
+    p.add_argument("--settle", type=float, default=SETTLE_S, metavar="S",
+                   help="the health monitor's settle_s in the bags [s] (default %(default)g: at least five time "
+                        "constants of the bench's flow meter)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
     args = p.parse_args(argv)
@@ -406,6 +414,7 @@ def main(argv=None) -> int:
         if args.profile_file is not None:
             load_profile_file(args.profile_file, cfg.range)          # inside the pump's range, or refused here
         ramp_s = length if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
+        check_range("--settle", args.settle, 0.0, 600.0, unit="s")
         _seeds(args.seeds)
         print(f"severities on {args.config or 'the default pump'} (the apparent loss at the health monitor's "
               f"reference point when reached):", flush=True)
@@ -413,7 +422,7 @@ def main(argv=None) -> int:
     except InputError as e:
         p.error(str(e))
     t0, out = time.time(), Path(args.out)
-    results = run_bags(out, _cases(args.seeds, sev), ramp_s, cfg, args.config, args.profile_file)
+    results = run_bags(out, _cases(args.seeds, sev), ramp_s, cfg, args.config, args.profile_file, args.settle)
     summary = alarm_summary(results)
     (out / "results.json").write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
                                                   "severities": sev, "results": results, "summary": summary},
