@@ -5,8 +5,8 @@
 ``diagnosis`` profile scaled to the pump's range; each kind alone; emulated pump at clearance factor 1.0
 against the twin of the same config, by default the packaged ``config/pump.yaml``; the fault ramps linearly
 from none at the start to its severity at ``--ramp`` s, default the bag's length, 0: a step), runs the twin
-over it (``run-bag``, health windows of 0.5 s after 0.5 s of settling, ``--settle``) and reports, with a line per bag as it
-goes:
+over it (``run-bag``, health windows of 0.5 s after 0.5 s of settling, ``--settle``) and reports, with a line per
+bag as it goes:
 
 * the severities, solved on the pump for the flow kinds: the value at which the fault's apparent loss at the
   health monitor's reference point is :data:`TARGET_LOSS` (4 pt low, 8 pt high; :func:`severity_for`), or the
