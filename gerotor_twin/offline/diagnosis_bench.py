@@ -336,7 +336,7 @@ def alarm_table(summary: dict) -> str:
 
 def severities(cfg, severity: str, progress=None) -> dict[str, list]:
     """kind → the severities of its bags on the pump ``cfg`` (``severity``: high | low | both): the flow kinds'
-    solved for :data:`TARGET_LOSS` (:func:`severity`), the others :data:`FIXED_SEVERITY`; healthy: [None].
+    solved for :data:`TARGET_LOSS` (:func:`severity_for`), the others :data:`FIXED_SEVERITY`; healthy: [None].
     ``progress``: a stream for one line per kind."""
     pick = {"high": (1,), "low": (0,), "both": (0, 1)}
     if severity not in pick:

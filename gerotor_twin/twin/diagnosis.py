@@ -38,7 +38,8 @@ Likelihood per kind
     ``suction_restriction``: the flow residuals as ``healthy`` (the twin runs on the measured suction
     pressure, so the restriction's effect on the flow is in the prediction) times the likelihood ratio of
     the suction pressures falling with the flow against falling with the speed only
-    (:func:`suction_log_ratio`); every other kind carries the suction pressures without that term.
+    (:func:`suction_log_ratio`; with ``trend`` the restriction's coefficient may grow in time as θ may);
+    every other kind carries the suction pressures without that term.
 
 Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
@@ -305,7 +306,7 @@ def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float, trend: bool 
     -------
     tuple of float
         Log-likelihood ratio [-] (−inf when the suction pressure never varies: no sensor) and the fitted
-        b at the last window [Pa·s²/m⁶] (0 with fewer than 4 windows, or 5 with the trend).
+        b at the last window [Pa·s²/m⁶] (0 with fewer than 4 windows; the trend needs 5).
     """
     n = len(records)
     y = np.array([r.p_suction for r in records])
