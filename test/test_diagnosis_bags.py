@@ -7,11 +7,15 @@ pump, docs/calibration_health.md, "Fault diagnosis"); then ``run-bag`` with the 
 0.5 s of settling (:func:`gerotor_twin.offline.diagnosis_bench.run_case`).  The full confusion tables over ramps,
 steps, seeds and severities are the benchmark (``python -m gerotor_twin.offline.diagnosis_bench``), not a test.
 """
+import math
+
 import pytest
 import yaml
 
 from gerotor_twin.config import load_config
-from gerotor_twin.offline.diagnosis_bench import run_case
+from gerotor_twin.hydraulics.meter import lag_step
+from gerotor_twin.offline.diagnosis_bench import health_args, run_case
+from gerotor_twin.offline.health_log import load_health
 
 #: kind → step severity (``--fault-to``): the default pump's high severities (8 pt at the reference point for the
 #: flow kinds; −5 bar is the offset range's end, 6.8 pt)
@@ -39,3 +43,26 @@ def test_short_bag_names_its_fault(kind, short_profile, tmp_path):
     assert r["named"] == kind, (r["named"], r["confidence"], r["alarms"])
     flow_fault = kind not in ("healthy", "speed_dropout", "suction_restriction")
     assert bool(r["alarms"]) == flow_fault, r["alarms"]
+
+
+def test_lag_step_closed_form():
+    """Closed form: a first-order sensor after one time constant of a unit step reads 1 − 1/e; two half steps are
+    one whole (the exact solution, not an Euler step); no lag (τ = 0) reads the input."""
+    assert lag_step(0.0, 1.0, 0.2, 0.2) == pytest.approx(1.0 - math.exp(-1.0), rel=1e-15)
+    assert lag_step(lag_step(0.0, 1.0, 0.1, 0.2), 1.0, 0.1, 0.2) == pytest.approx(lag_step(0.0, 1.0, 0.2, 0.2),
+                                                                                   rel=1e-14)
+    assert lag_step(3.0, 1.0, 0.5, 0.0) == 1.0
+
+
+def test_meter_lag_read_alike_right_after_a_step(short_profile, tmp_path):
+    """Behaviour: on a healthy bag whose flow meter lags 0.2 s (the emulator's default), windows counted right
+    after each step (``settle_s`` = 0) see the meter still settling: the residuals carry part of the flow's step
+    (0.4 L/min at seed 3); with the monitor told the meter's time constant (``flow_sensor_tau_s``) the model's
+    flows are read through the same lag and the largest residual falls to the noise's size (below a third)."""
+    worst = []
+    for tau, sub in ((0.0, "raw"), (0.2, "lagged")):
+        r = run_case(load_config(), "healthy", None, 3, tmp_path / sub, 0.0, profile_file=str(short_profile),
+                     health=health_args(settle_s=0.0, flow_sensor_tau_s=tau))
+        _, rows = load_health(tmp_path / sub / "healthy_3_twin.mcap")
+        worst.append(max(abs(float(row["residual_m3s"])) for row in rows))
+    assert worst[1] < worst[0] / 3, worst

@@ -9,12 +9,16 @@ meter, reads the same mass flow expanded back to atmospheric pressure, ρ(p_d)/�
 (≈ 1.2 % at 170 bar with β ≈ 1.5 GPa; 0.2 % at 27.5 bar), a difference that grows with the pressure and not with
 the speed: compared as if it were the outlet's, it reads as leakage that does not scale like leakage.  Isothermal:
 a meter behind a cooler reads the cooled oil's volume, which this leaves out.
+
+A meter also reads late: a first-order lag of time constant τ (:func:`lag_step`), which the twin's flows are read
+through to be compared with the meter's readings while they settle (``report --flow-sensor-tau``, the health
+monitor's ``flow_sensor_tau_s``).
 """
 from __future__ import annotations
 
 import math
 
-__all__ = ["FLOW_METERS", "expansion", "oil_state_equation"]
+__all__ = ["FLOW_METERS", "expansion", "oil_state_equation", "lag_step"]
 
 #: Where a measured flow was read: ``delivery`` (at the delivery pressure: the twin's delivery flow) or
 #: ``atmospheric`` (in the return line).  ``calibrate --flow-meter``, the twin's ``flow_meter`` setting.
@@ -33,3 +37,15 @@ def oil_state_equation(config, t_k: float | None = None):
     built as the twin builds it (≈ 1–3 ms), for :func:`expansion`."""
     from .state_equation import state_equation
     return state_equation(config.fluid_at(t_k), config.fluid_model, config.air)
+
+
+def lag_step(y: float, v: float, dt_s: float, tau_s: float) -> float:
+    r"""A first-order-lag sensor's reading after ``dt_s`` [s] of the input ``v`` held, from the reading ``y``:
+
+    .. math:: y' = v + (y - v)\, e^{-\Delta t/\tau}
+
+    exact for :math:`\tau \dot y = v - y` with v constant over the interval; ``tau_s`` ≤ 0: ``v`` (no lag).
+    Units: those of the signal; ``dt_s``, ``tau_s`` [s]."""
+    if not tau_s > 0:
+        return v
+    return v + (y - v) * math.exp(-max(dt_s, 0.0) / tau_s)

@@ -45,7 +45,7 @@ from ..twin.health import LEVELS, alarm_records, fault_name
 from .health_log import load_health
 
 __all__ = ["profile_s", "LOSS_PT", "CASES", "TARGET_LOSS", "FIXED_SEVERITY", "severity_for", "severities",
-           "reference_loss", "crossing_time", "truth_crossing",
+           "reference_loss", "crossing_time", "truth_crossing", "health_args", "WINDOW_S", "SETTLE_S",
            "first_named_alarm", "run_case", "confusion", "alarm_summary", "alarm_table", "main", "model_records",
            "MODEL_CASES", "POINTS"]
 
@@ -245,11 +245,20 @@ def first_named_alarm(t, rows, kind: str) -> float | None:
 WINDOW_S, SETTLE_S = 0.5, 0.5
 
 
+def health_args(settle_s: float = SETTLE_S, flow_sensor_tau_s: float = 0.0) -> tuple[str, ...]:
+    """``run-bag --health`` settings of the bags' monitor: windows of :data:`WINDOW_S`, ``settle_s`` [s] and the
+    flow meter's time constant ``flow_sensor_tau_s`` [s] (0: off, left at the monitor's default)."""
+    items = [f"window_s={WINDOW_S:g}", f"settle_s={settle_s:g}"]
+    items += [f"flow_sensor_tau_s={flow_sensor_tau_s:g}"] if flow_sensor_tau_s > 0 else []
+    return tuple(a for item in items for a in ("--health", item))
+
+
 def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float, config_path: str | None = None,
-             profile_file: str | None = None, settle_s: float = SETTLE_S) -> dict:
+             profile_file: str | None = None, health: tuple = health_args()) -> dict:
     """One bag of ``kind`` reaching severity ``to`` [the kind's unit] over ``ramp_s`` [s] from the start, noise
     ``seed``, on the pump ``cfg`` (read from ``config_path``; None: the packaged default pump) along the
-    ``diagnosis`` profile or ``profile_file``, and the twin over it.
+    ``diagnosis`` profile or ``profile_file``, and the twin over it (``health``: its ``run-bag`` monitor
+    settings, :func:`health_args`).
 
     Returns
     -------
@@ -267,7 +276,7 @@ def run_case(cfg, kind: str, to, seed: int, out: Path, ramp_s: float, config_pat
     argv = ["synth-bench", *profile, *pump, "--clearance-factor", "1.0", "--seed",
             str(seed), "-o", str(bag), "--overwrite", "--quiet", *fault]
     if cli_main(argv) or cli_main(["run-bag", str(bag), *pump, "-o", str(twin), "--overwrite", "--quiet",
-                                   "--health", f"window_s={WINDOW_S:g}", "--health", f"settle_s={settle_s:g}"]):
+                                   *health]):
         raise RuntimeError(f"{kind} {to} seed {seed}: a command failed")
     t, rows = load_health(twin)
     crossing, loss_end = (None, 0.0) if to is None else truth_crossing(cfg, bag, kind)
@@ -368,12 +377,12 @@ def _cases(seeds: str, sev: dict[str, list]) -> list[tuple[str, float | None, in
 
 
 def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = None,
-             profile_file: str | None = None, settle_s: float = SETTLE_S) -> list[dict]:
+             profile_file: str | None = None, health: tuple = health_args()) -> list[dict]:
     """:func:`run_case` over ``cases`` ((kind, severity, seed)) into ``out``, one progress line per bag."""
     out.mkdir(parents=True, exist_ok=True)
     results, t0 = [], time.time()
     for i, (kind, to, seed) in enumerate(cases, 1):
-        r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file, settle_s)
+        r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file, health)
         results.append(r)
         alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {a['fault']}" for a in r["alarms"])
         cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
@@ -400,6 +409,9 @@ def main(argv=None) -> int:
     p.add_argument("--settle", type=float, default=SETTLE_S, metavar="S",
                    help="the health monitor's settle_s in the bags [s] (default %(default)g: at least five time "
                         "constants of the bench's flow meter)")
+    p.add_argument("--flow-sensor-tau", type=float, default=0.0, metavar="S",
+                   help="the bench flow meter's time constant [s] given to the monitor (health flow_sensor_tau_s; "
+                        "default 0: off)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
     args = p.parse_args(argv)
@@ -415,6 +427,7 @@ def main(argv=None) -> int:
             load_profile_file(args.profile_file, cfg.range)          # inside the pump's range, or refused here
         ramp_s = length if args.ramp is None else check_range("--ramp", args.ramp, 0.0, 1e4, unit="s")
         check_range("--settle", args.settle, 0.0, 600.0, unit="s")
+        check_range("--flow-sensor-tau", args.flow_sensor_tau, 0.0, 60.0, unit="s")
         _seeds(args.seeds)
         print(f"severities on {args.config or 'the default pump'} (the apparent loss at the health monitor's "
               f"reference point when reached):", flush=True)
@@ -422,7 +435,8 @@ def main(argv=None) -> int:
     except InputError as e:
         p.error(str(e))
     t0, out = time.time(), Path(args.out)
-    results = run_bags(out, _cases(args.seeds, sev), ramp_s, cfg, args.config, args.profile_file, args.settle)
+    results = run_bags(out, _cases(args.seeds, sev), ramp_s, cfg, args.config, args.profile_file,
+                       health_args(args.settle, args.flow_sensor_tau))
     summary = alarm_summary(results)
     (out / "results.json").write_text(json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
                                                   "severities": sev, "results": results, "summary": summary},

@@ -185,14 +185,15 @@ def read_through_lag(t: np.ndarray, v: np.ndarray, tau: float) -> np.ndarray:
 
     exact for v held over each interval (:math:`\tau \dot y = v - y`); ``tau`` ≤ 0 returns ``v``.
     """
+    from gerotor_twin.hydraulics.meter import lag_step
     v = np.asarray(v, dtype=float)
     if not tau > 0 or v.size == 0:
         return v
-    decay = np.exp(-np.diff(np.asarray(t, dtype=float)) / tau)
+    dt = np.diff(np.asarray(t, dtype=float))
     y = np.empty_like(v)
     y[0] = v[0]
     for k in range(1, v.size):
-        y[k] = v[k] + (y[k - 1] - v[k]) * decay[k - 1]
+        y[k] = lag_step(y[k - 1], v[k], dt[k - 1], tau)
     return y
 
 

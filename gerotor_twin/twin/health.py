@@ -57,6 +57,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 from gerotor_twin.errors import InputError, check_int, check_ranges
+from gerotor_twin.hydraulics.meter import lag_step
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import FLOW_KINDS, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
@@ -174,13 +175,15 @@ class HealthSettings:
     reference_rpm: float = 1500.0
     reference_bar: float = 20.0
     reference_oil_c: float = 50.0
+    flow_sensor_tau_s: float = 0.0
 
     def __post_init__(self):
         check_ranges(self, "health_", (
             ("window_s", 0.05, 600.0), ("settle_s", 0.0, 600.0), ("speed_tol", 1e-4, 1.0), ("pressure_tol_pa", 1.0, 1e7),
             ("meter_sd_rel", 0.0, 1.0), ("model_sd_rel", 0.0, 1.0), ("drift_per_sqrt_s", 0.0, 10.0),
             ("initial_sd", 1e-6, 100.0), ("warn_pt", 0.0, 100.0), ("error_pt", 0.0, 100.0), ("residual_band", 0.1, 1e3),
-            ("reference_rpm", 1.0, 1e5), ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0)))
+            ("reference_rpm", 1.0, 1e5), ("reference_bar", 0.0, 1e3), ("reference_oil_c", -50.0, 300.0),
+            ("flow_sensor_tau_s", 0.0, 60.0)))
         for name, lo, hi in (("min_flow_samples", 1, 10**6), ("band_updates", 1, 10**6), ("min_updates", 1, 10**6),
                              ("residual_window", 1, 10**6)):
             check_int(f"health_{name}", getattr(self, name), lo, hi)
@@ -300,6 +303,7 @@ class HealthMonitor:
         self.diagnosis: Diagnosis | None = None
         self._signature_of = None
         self._speed = SpeedCounter()
+        self._meter: tuple | None = None      # (stamp [ns], the model's flows as the meter reads them)
 
     # ------------------------------------------------------------- inputs
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
@@ -314,6 +318,7 @@ class HealthMonitor:
         """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
         self._flow.forget_after(now_ns)
         self._speed.forget_after(now_ns)
+        self._meter = None
 
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
@@ -327,8 +332,10 @@ class HealthMonitor:
         if inputs is not None:
             w.add_inputs(inputs)
         for msg in messages:
-            if msg.topic == FLOW_SUMMARY and msg.stamp_ns >= w.start_ns:
-                q, qth, loss, _eta = msg.msg["data"][:4]
+            if msg.topic != FLOW_SUMMARY:
+                continue
+            q, qth, loss = self._read_through_meter(msg.stamp_ns, msg.msg["data"][:3])
+            if msg.stamp_ns >= w.start_ns:
                 w.revs += 1
                 w.q_pred += q
                 w.q_th += qth
@@ -337,6 +344,22 @@ class HealthMonitor:
             return []
         self._win = _Window(now_ns)
         return self._close(w, now_ns)
+
+    def _read_through_meter(self, stamp_ns: int, values) -> tuple:
+        """A revolution's mean delivery, theoretical flow and loss [m³/s] as the bench's flow meter reads them: a
+        first-order lag of ``flow_sensor_tau_s`` (:func:`~gerotor_twin.hydraulics.meter.lag_step`, each mean held
+        over its revolution), so that the window compares the meter's reading with the model's flow read alike,
+        settled or not (the loss read alike too: the meter reads q_th − k·loss as lag(q_th) − k·lag(loss)).
+        0: the values as they are."""
+        tau = self.settings.flow_sensor_tau_s
+        values = tuple(float(v) for v in values)
+        if not tau > 0:
+            return values
+        prev = self._meter
+        if prev is not None and stamp_ns >= prev[0]:
+            values = tuple(lag_step(y, v, (stamp_ns - prev[0]) / NS, tau) for y, v in zip(prev[1], values))
+        self._meter = (stamp_ns, values)
+        return values
 
     def _track_steady(self, now_ns: int, inputs) -> None:
         s = self.settings
