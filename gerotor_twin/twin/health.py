@@ -57,7 +57,6 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 from gerotor_twin.errors import InputError, check_int, check_ranges
-from gerotor_twin.hydraulics.meter import lag_step
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import FLOW_KINDS, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
@@ -355,6 +354,7 @@ class HealthMonitor:
         values = tuple(float(v) for v in values)
         if not tau > 0:
             return values
+        from gerotor_twin.hydraulics.meter import lag_step     # not at import: hydraulics' package imports numba
         prev = self._meter
         if prev is not None and stamp_ns >= prev[0]:
             values = tuple(lag_step(y, v, (stamp_ns - prev[0]) / NS, tau) for y, v in zip(prev[1], values))
