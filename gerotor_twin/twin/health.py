@@ -16,7 +16,10 @@ When it is updated (robust to ramps and to the flow meter's lag)
     ``speed_tol`` (relative) and ``pressure_tol_pa`` of their value at the window start
     for the whole window *and* for ``settle_s`` before it (≥ 5 flow-meter time
     constants: the meter has caught up), with at least one revolution summary and
-    ``min_flow_samples`` measured flow samples.  Ramps and steps are ignored.
+    ``min_flow_samples`` measured flow samples.  Ramps and steps are ignored.  With
+    ``flow_sensor_tau_s`` > 0 the model's revolution means are read through the meter's
+    first-order lag before they are averaged (:meth:`HealthMonitor._read_through_meter`),
+    so a window in which the meter still settles compares like with like.
     Measurement: y = mean theoretical − mean measured flow; regressor: mean predicted
     loss / the factor the model runs with; noise variance
     (``meter_sd_rel`` · q)²/n + max((``model_sd_rel`` · q)², (e_cal · q_th)²), where e_cal is
