@@ -84,9 +84,8 @@ def test_map_follows_a_7000_rpm_5_bar_pump(pump_7000):
 def test_diagnosis_profile_is_the_file_scaled(pump_7000):
     """Closed form: the built-in ``diagnosis`` profile is config/profiles/diagnosis.yaml on the default range (its
     oil temperature kept; four operating points, each visited twice) and on a 7000 rpm / 5 bar pump the same
-    plateaus at the scaled set-points: 1000 →
-    7000/3 and 2500 → 7000/3 + 1500·(7000 − 7000/3)/2000 rpm, 5 and 25 bar × 5/27.5, rounded to 10 rpm and
-    0.01 bar."""
+    plateaus at the scaled set-points: 1000 → 7000/3 and 2500 → 7000/3 + 1500·(7000 − 7000/3)/2000 rpm, 5 and
+    25 bar × 5/27.5, rounded to 10 rpm and 0.01 bar."""
     written = load_profile_file(ROOT / "config" / "profiles" / "diagnosis.yaml").segments
     assert get_profile("diagnosis", load_config().range).segments == written
     plateaus = [(rpm, bar) for *_, rpm, bar in get_profile("diagnosis").plateaus()]

@@ -112,7 +112,7 @@ def model_windows_table() -> str:
 LOSS_PT = 0.02
 
 #: apparent loss of volumetric efficiency at the monitor's reference point that a flow kind's (low, high)
-#: severity reaches at the end of its ramp [-]: each pump gets the severities that make it (:func:`severity`)
+#: severity reaches at the end of its ramp [-]: each pump gets the severities that make it (:func:`severity_for`)
 TARGET_LOSS = (0.04, 0.08)
 #: the kinds that leave the measured flow as predicted → (low, high) severity (``--fault-to``)
 FIXED_SEVERITY = {"speed_dropout": (0.1, 0.3), "suction_restriction": (3e4, 6e4)}
@@ -136,9 +136,9 @@ def severity_for(cfg, kind: str, target: float = TARGET_LOSS[1], settings=None) 
     Solved by Brent's method between no fault and the end of the kind's allowed range in the direction that
     loses flow (:data:`~gerotor_twin.bench_emulator.faults.FAULT_KINDS`: a wear × 3, 10 % of free air, an
     offset of −5 bar but no lower than the reference pressure read as 0 bar gauge, a gain of −0.5); the meter
-    gain g in closed form, −g·η_v = target.  Where even the end
-    of the range loses less (a low-pressure pump's tip wear), that end, with the loss it reaches.  Rounded to
-    three significant digits of its distance from no fault, so a table can quote it.
+    gain g in closed form, −g·η_v = target.  Where even the end of the range loses less (a low-pressure pump's
+    tip wear), that end, with the loss it reaches.  Rounded to three significant digits of its distance from no
+    fault, so a table can quote it.
     """
     from scipy.optimize import brentq
     from ..bench_emulator.faults import FAULT_KINDS
@@ -241,7 +241,8 @@ def first_named_alarm(t, rows, kind: str) -> float | None:
 
 
 #: the health monitor's windows in the bags [s]: ``window_s`` and ``settle_s`` (the speed and pressure steady this
-#: long first; ≥ 5 time constants of the bench's flow meter, 0.2 s on the default bench, HealthSettings)
+#: long first: 2.5 time constants of the default bench's 0.2-s flow meter, where the monitor's settings ask for
+#: five; kept so the figures stay comparable, docs/calibration_health.md, "The windows' settling")
 WINDOW_S, SETTLE_S = 0.5, 0.5
 
 
@@ -407,8 +408,8 @@ def main(argv=None) -> int:
     p.add_argument("--profile-file", default=None, metavar="F",
                    help="a profile YAML file instead of the built-in diagnosis profile (taken as written)")
     p.add_argument("--settle", type=float, default=SETTLE_S, metavar="S",
-                   help="the health monitor's settle_s in the bags [s] (default %(default)g: at least five time "
-                        "constants of the bench's flow meter)")
+                   help="the health monitor's settle_s in the bags [s] (default %(default)g; the monitor asks for at "
+                        "least five time constants of the bench's flow meter)")
     p.add_argument("--flow-sensor-tau", type=float, default=0.0, metavar="S",
                    help="the bench flow meter's time constant [s] given to the monitor (health flow_sensor_tau_s; "
                         "default 0: off)")

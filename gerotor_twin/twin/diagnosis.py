@@ -310,11 +310,11 @@ def suction_log_ratio(records, sd_floor_pa: float, prior_pa: float, trend: bool 
     """
     n = len(records)
     y = np.array([r.p_suction for r in records])
-    t = np.array([r.t_s for r in records]) - records[0].t_s if n else np.zeros(0)
-    span = float(t[-1]) if n else 0.0
-    trend = trend and span > 0.0 and n >= 5
     if n < 4 or np.ptp(y) == 0.0:
         return -math.inf, 0.0
+    t = np.array([r.t_s for r in records]) - records[0].t_s
+    span = float(t[-1])
+    trend = trend and span > 0.0 and n >= 5
     x0 = np.column_stack([np.ones(n), -np.array([r.omega for r in records]) ** 2])
     q2 = -np.array([r.q_meas for r in records]) ** 2
     x1 = np.column_stack([x0, q2, q2 * t] if trend else [x0, q2])
