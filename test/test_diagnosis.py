@@ -12,10 +12,10 @@ import pytest
 
 from gerotor_twin.config import load_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.twin.diagnosis import (DiagnosisSettings, KINDS, KIND_CODES, SpeedCounter, SteadySignatures,
-                                         WindowRecord, _fit_kind, classify, kind_log_likelihood, missing_fraction,
-                                         operating_points, point_key)
-from gerotor_twin.twin.health import alarm_records
+from gerotor_twin.twin.diagnosis import (DiagnosisSettings, FLOW_KINDS, KINDS, KIND_CODES, SpeedCounter, SteadySignatures,
+                                         WindowRecord, _fit_kind, classify, fitted_residuals, kind_log_likelihood,
+                                         missing_fraction, operating_points, point_key, separation)
+from gerotor_twin.twin.health import alarm_records, fault_candidates, fault_text
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
                                                  main as bench_main, model_records, reference_loss, severity_for)
 
@@ -168,6 +168,64 @@ def test_one_operating_point_names_no_kind(plant):
         assert d.kind == expected and d.confidence > 0.9, d.probability
 
 
+def test_separation_closed_form():
+    """Closed form: for a step (no trend, no drift) a kind's marginal log-likelihood of residuals θ̂·d is
+    −½θ̂²s/(1 + P₀s) − ½ln(1 + P₀s) + const, s = Σ d²/σ², θ̂ = θ·s/(s + 1/P₀) the posterior mode of residuals θ·d;
+    a kind whose column is c·d has s → c²s, and the same column separates by nothing."""
+    d, sd, t = np.array([1.0, 2.0, 1.5, 0.5]), np.full(4, 0.1), np.arange(4.0)
+    theta, p0, c = 0.3, 0.2 ** 2, 2.0
+    s = float(np.sum((d / sd) ** 2))
+    th = theta * s / (s + 1.0 / p0)
+    assert fitted_residuals(theta * d, d, sd, t, 0.2) == pytest.approx(th * d, rel=1e-12)
+
+    def ll(scale):
+        return -0.5 * th ** 2 * s / (1.0 + p0 * scale ** 2 * s) - 0.5 * math.log(1.0 + p0 * scale ** 2 * s)
+    assert separation(theta * d, d, c * d, sd, t, 0.2, 0.0) == pytest.approx(ll(1.0) - ll(c), rel=1e-9)
+    assert separation(theta * d, d, d, sd, t, 0.2, 0.0) == 0.0
+
+
+def test_separation_is_the_mean_and_half_the_variance_of_the_observed_ratio():
+    """Behaviour (Monte Carlo, the law the naming threshold rests on): with kind a true, the log-likelihood ratio
+    of a over b observed on noisy residuals has mean ≈ Δ (:func:`separation`) and variance ≈ 2Δ, so its sign
+    is wrong with probability ≈ Φ(−√(Δ/2))."""
+    rng = np.random.default_rng(7)
+    n = 12
+    t = np.arange(n) * 0.5
+    d_a = np.linspace(1.0, 2.0, n)
+    d_b = np.linspace(1.0, 2.0, n) ** 1.3                  # nearly collinear: Δ of a few nats
+    sd = np.full(n, 0.02)
+    truth = 0.15 * d_a
+    delta = separation(truth, d_a, d_b, sd, t, 0.2, 0.0)
+    assert 2.0 < delta < 20.0
+    obs = []
+    for _ in range(3000):
+        e = truth + rng.normal(0.0, sd)
+        obs.append(kind_log_likelihood(e, d_a, sd, t, 0.2, 0.0)[0] - kind_log_likelihood(e, d_b, sd, t, 0.2, 0.0)[0])
+    obs = np.array(obs)
+    assert obs.mean() == pytest.approx(delta, abs=0.15 * delta)
+    assert obs.var() == pytest.approx(2.0 * delta, rel=0.25)
+    wrong = 0.5 * math.erfc(math.sqrt(delta / 2.0) / math.sqrt(2.0))
+    assert np.mean(obs < 0.0) == pytest.approx(wrong, abs=0.03)
+
+
+def test_kinds_one_speed_cannot_tell_apart_are_not_named(plant):
+    """Behaviour: free air and a delivery-pressure offset each change the flow by the same amount at every
+    pressure of one speed: on windows at 1000 rpm and 5 / 25 bar, with either fault, the classifier names neither:
+    ``unknown``, the more likely of the two with the other as its closest rival; with 2500 rpm seen too, air is
+    named."""
+    cfg, sig = plant
+    one_speed = ((1000, 5), (1000, 25))
+    for fault in ({"air_fraction": 0.04}, {"offset_pa": -3e5}):
+        recs = _records(cfg, fault, points=one_speed)
+        d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
+        best = max(FLOW_KINDS, key=lambda k: d.probability.get(k, 0.0))
+        assert d.kind == "unknown" and {best, d.rival} == {"air_ingress", "pressure_offset"}, (d.rival, d.probability)
+        assert d.separation < 2.0 * DiagnosisSettings().separable_z ** 2
+    recs = _records(cfg, {"air_fraction": 0.04}, points=one_speed + ((2500, 25),))
+    d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
+    assert d.kind == "air_ingress" and d.separation > 2.0 * DiagnosisSettings().separable_z ** 2, (d.rival, d.separation)
+
+
 def test_unknown_when_nothing_fits(plant):
     """Behaviour: a residual no candidate makes (flow gained at high pressure only, lost at low) is "unknown"."""
     cfg, sig = plant
@@ -262,10 +320,11 @@ def test_relinearisation_converges_closed_form():
         return list(a + b * theta), theta
     s = DiagnosisSettings(prior_sd=10.0, drift_per_sqrt_s=0.0, relinearise=8)
     sigs = [{"tip_wear": ai + bi} for ai, bi in zip(a, b)]
-    lin = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0)
-    fit = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0, secant)
+    lin = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0)[0]
+    fit, column = _fit_kind("tip_wear", None, sigs, e, sd, t, s, 0.0, secant)
     assert abs(lin[1] - 3.0) > 0.1 and lin[3] > 1e3
     assert fit[1] == pytest.approx(3.0, rel=1e-4) and fit[3] < len(e) and len(calls) <= 8
+    assert column == pytest.approx(a + b * 3.0, rel=1e-4)
     calls.clear()
     _fit_kind("tip_wear", None, sigs, e, sd, t, DiagnosisSettings(prior_sd=10.0, relinearise=2), 0.0, secant)
     assert len(calls) == 2
@@ -299,8 +358,15 @@ def test_alarm_record_names_closed_form():
             row(1, "lateral_wear", 0.7), row(2, "lateral_wear", 0.8)]
     warn, error = alarm_records(t, rows)
     assert warn == {"start_s": 2.0, "end_s": 5.0, "level": "WARN", "fault": "lateral_wear", "confidence": 0.7,
-                    "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
+                    "candidates": [], "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
     assert (error["fault"], error["first_fault"], error["named_at_s"]) == ("lateral_wear", "lateral_wear", 6.0)
+    # an unknown that stands for two kinds the windows cannot tell apart carries them; one without them does not
+    pair = {"fault_likely": KIND_CODES["air_ingress"], "fault_rival": KIND_CODES["pressure_offset"]}
+    rows[-1] = {**row(2, "unknown", 0.99), **pair}
+    assert alarm_records(t, rows)[-1]["candidates"] == ["air_ingress", "pressure_offset"]
+    assert fault_text("unknown", 0.99, ("air_ingress", "pressure_offset")) == "unknown (0.99): air_ingress or pressure_offset"
+    rows[-1] = {**row(2, "unknown", 0.99), "fault_likely": -1.0, "fault_rival": -1.0}
+    assert alarm_records(t, rows)[-1]["candidates"] == [] and fault_candidates({**row(2, "tip_wear", 0.9), **pair}) == ()
 
 
 def test_operating_points_by_tolerance_closed_form():

@@ -45,8 +45,11 @@ Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
     also when the best kind's innovations have χ² > n + ``chi2_z``·√(2n) (no kind explains the
     residuals), and when a flow kind wins on windows at fewer than two operating points (speed within
-    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ.  The
-    confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
+    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ;
+    more generally, when the windows do not separate the most likely flow kind from its closest candidate
+    rival: their expected log-likelihood ratio (:func:`separation`) below 2·``separable_z``², at which noise
+    alone would reverse the call more often than Φ(−z) (10 %) — air ingress and a pressure offset at one speed.
+    The confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
     samples missing over the horizon (:func:`missing_fraction`); above ``dropout_min`` it is named when
     the flow residuals are explained by ``healthy`` (confidence: that probability).
 """
@@ -61,7 +64,7 @@ from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.units import celsius_to_kelvin
 
 __all__ = ["SpeedCounter", "suction_log_ratio", "WindowRecord", "DiagnosisSettings", "Diagnosis", "SteadySignatures", "FLOW_KINDS", "KINDS",
-           "kind_log_likelihood", "classify", "point_key", "operating_points", "missing_fraction", "KIND_CODES"]
+           "kind_log_likelihood", "fitted_residuals", "separation", "classify", "point_key", "operating_points", "missing_fraction", "KIND_CODES"]
 
 #: fault kinds with a flow signature, in the order of the signature columns
 FLOW_KINDS = ("tip_wear", "lateral_wear", "air_ingress", "pressure_offset", "flowmeter_drift")
@@ -123,7 +126,9 @@ class DiagnosisSettings:
     ``pressure_step_pa`` [Pa]; ``relinearise`` [-]: at most this many re-linearisations of a kind's signature at
     its fitted size (0: the signatures at the steps only; module doc); ``point_speed_tol`` [-] (relative) and
     ``point_pressure_pa`` [Pa]: windows within both of each other are one operating point
-    (:func:`operating_points`; the health monitor passes its steady-window tolerances).
+    (:func:`operating_points`; the health monitor passes its steady-window tolerances); ``separable_z`` [-]: a flow
+    kind is named only when the windows separate it from every other candidate by an expected log-likelihood ratio
+    of at least 2·z² (:func:`separation`; 1.2816: noise alone reverses the ratio's sign at most 10 % of the time).
     """
     horizon: int = 30
     prior_sd: float = 0.2
@@ -141,13 +146,14 @@ class DiagnosisSettings:
     relinearise: int = 2
     point_speed_tol: float = 0.01
     point_pressure_pa: float = 5e4
+    separable_z: float = 1.2816
 
     def __post_init__(self):
         check_ranges(self, "diagnosis_", (
             ("prior_sd", 1e-6, 10.0), ("drift_per_sqrt_s", 0.0, 1.0), ("unknown_scale", 1.01, 1e3), ("chi2_z", 0.0, 1e3),
             ("sign_sd", 0.0, 1e3), ("dropout_min", 0.0, 1.0), ("suction_sd_pa", 1e-3, 1e5), ("suction_prior_pa", 1.0, 1e6),
             ("rel_step", 1e-4, 1.0), ("air_step", 1e-5, 0.05), ("pressure_step_pa", 1.0, 1e6),
-            ("point_speed_tol", 1e-4, 1.0), ("point_pressure_pa", 1.0, 1e7)))
+            ("point_speed_tol", 1e-4, 1.0), ("point_pressure_pa", 1.0, 1e7), ("separable_z", 0.0, 10.0)))
         check_int("diagnosis_horizon", self.horizon, 1, 10**5)
         check_int("diagnosis_relinearise", self.relinearise, 0, 10)
         if not isinstance(self.trend, bool):
@@ -172,6 +178,14 @@ class Diagnosis:
         Windows used.
     dropout : float
         Fraction of the shaft-speed samples missing [-].
+    likely : str
+        The most likely flow kind when one was the most likely candidate ('' otherwise): ``kind`` itself, or the
+        kind ``unknown`` stands for when the windows cannot tell it from ``rival``.
+    rival : str
+        The candidate flow kind closest to ``likely`` at the windows seen ('' when none was compared).
+    separation : float
+        Their expected log-likelihood ratio (:func:`separation`) [-]; below 2·``separable_z``² the kind is
+        ``unknown``: the windows cannot tell the two apart.
     """
     kind: str
     confidence: float
@@ -181,6 +195,9 @@ class Diagnosis:
     chi2: float
     windows: int
     dropout: float = 0.0
+    likely: str = ""
+    rival: str = ""
+    separation: float = math.nan
 
     @property
     def code(self) -> int:
@@ -339,11 +356,50 @@ def missing_fraction(records) -> float:
     return max(0.0, 1.0 - got / expected) if expected > 0 else 0.0
 
 
+def fitted_residuals(e, d, sd, t_s, prior_sd: float, rate_sd: float = 0.0) -> np.ndarray:
+    r"""The residuals a kind's model makes at its most probable size and growth [m³/s]:
+
+    .. math:: \hat e_i = (\hat\theta_0 + \hat r\,\tau_i)\,d_i,\qquad \tau_i = t_i - t_0,
+
+    (θ̂₀, r̂) the posterior mode of :func:`kind_log_likelihood`'s trend without the random walk (weighted least
+    squares with the priors N(0, ``prior_sd``²), N(0, ``rate_sd``²); ``rate_sd`` 0: a step).  Arguments as
+    :func:`kind_log_likelihood`'s."""
+    d, w = np.asarray(d, float), 1.0 / np.asarray(sd, float)
+    tau = np.asarray(t_s, float) - float(t_s[0])
+    cols = np.column_stack([d, d * tau]) if rate_sd > 0 else d[:, None]
+    prior = np.diag([prior_sd ** -2.0, rate_sd ** -2.0 if rate_sd > 0 else 0.0][:cols.shape[1]])
+    a = cols * w[:, None]
+    return cols @ np.linalg.solve(a.T @ a + prior, a.T @ (np.asarray(e, float) * w))
+
+
+def separation(e, d_a, d_b, sd, t_s, prior_sd: float, drift_per_sqrt_s: float, rate_sd: float = 0.0) -> float:
+    r"""How well the windows tell kind a from kind b: the expected log-likelihood ratio of a over b were a true
+    as fitted [-].
+
+    .. math:: \Delta = \ell_a(\hat e) - \ell_b(\hat e)
+
+    with ê the residuals a fits (:func:`fitted_residuals`) and ℓ :func:`kind_log_likelihood` on them, noise-free.
+    On residuals ê + v, v ~ N(0, diag σ²), the ratio of two Gaussian linear models is ≈ ½‖(I − P_b)(ê + v)‖²
+    in the σ-weighted norm (P_b the projection on b's columns, a's columns reproducing ê): mean ≈ Δ, variance
+    ≈ 2Δ, so the noise alone reverses its sign with a probability ≈ Φ(−√(Δ/2)).  Columns ``d_a``, ``d_b``
+    [m³/s per unit θ]; the other arguments as :func:`kind_log_likelihood`'s.
+
+    Notes
+    -----
+    Two kinds whose signatures are proportional over the windows (one operating point; or air ingress and a
+    delivery-pressure offset at one speed, each the same flow change at every pressure there) give Δ ≈ 0 however
+    large the fault: the data favour one of them by noise and by the models' small errors only.
+    """
+    fit = fitted_residuals(e, d_a, sd, t_s, prior_sd, rate_sd)
+    ll = [kind_log_likelihood(fit, d, sd, t_s, prior_sd, drift_per_sqrt_s, rate_sd)[0] for d in (d_a, d_b)]
+    return ll[0] - ll[1]
+
+
 def _fit_kind(kind: str, recs, sigs, e, sd, t, s: DiagnosisSettings, rate_sd: float, relinearise=None):
     """:func:`kind_log_likelihood` of ``kind`` on the signature columns ``sigs``, re-linearised at the fitted
     size up to ``s.relinearise`` times by ``relinearise(recs, kind, θ, n)`` (the column at the size fitted with
     the column of n steps, and its size in steps; or None: keep this one); it stops when the size no longer
-    changes."""
+    changes.  Returns the fit and the column it was made with."""
     d, n = [g[kind] for g in sigs], 1.0
     fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
     for _ in range(s.relinearise if relinearise is not None else 0):
@@ -352,7 +408,15 @@ def _fit_kind(kind: str, recs, sigs, e, sd, t, s: DiagnosisSettings, rate_sd: fl
             break
         d, n = new
         fit = kind_log_likelihood(e, d, sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
-    return fit
+    return fit, d
+
+
+def _closest_rival(kind: str, columns: dict, ll: dict, e, sd, t, s: DiagnosisSettings,
+                   rate_sd: float) -> tuple[str, float]:
+    """The candidate flow kind the windows separate least from ``kind`` and its :func:`separation` [-]."""
+    seps = {k: separation(e, columns[kind], columns[k], sd, t, s.prior_sd, s.drift_per_sqrt_s, rate_sd)
+            for k in FLOW_KINDS if k != kind and k in ll}
+    return min(seps.items(), key=lambda kv: kv[1], default=("", math.nan))
 
 
 def _decide(ll: dict, chi2: dict, recs, s: DiagnosisSettings) -> tuple[str, dict, str]:
@@ -405,11 +469,11 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
     sd = [max(r.sd, 1e-15) for r in recs]
     t = [r.t_s for r in recs]
     ll = {"healthy": _white_log_likelihood(e, sd), "unknown": _white_log_likelihood(e, [s.unknown_scale * v for v in sd])}
-    theta, chi2 = {}, {"healthy": float(sum((a / b) ** 2 for a, b in zip(e, sd)))}
+    theta, chi2, columns = {}, {"healthy": float(sum((a / b) ** 2 for a, b in zip(e, sd)))}, {}
     span = t[-1] - t[0]
     rate_sd = s.prior_sd / span if s.trend and span > 0 else 0.0
     for kind in FLOW_KINDS:
-        ll_k, th, th_sd, chi2[kind] = _fit_kind(kind, recs, sigs, e, sd, t, s, rate_sd, relinearise)
+        (ll_k, th, th_sd, chi2[kind]), columns[kind] = _fit_kind(kind, recs, sigs, e, sd, t, s, rate_sd, relinearise)
         theta[kind] = th
         if _SIGN[kind] and th * _SIGN[kind] < -s.sign_sd * th_sd:
             continue                                    # the fault cannot move the flow that way
@@ -419,11 +483,15 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
     ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
     chi2["suction_restriction"] = chi2["healthy"]
     kind, prob, best = _decide(ll, chi2, recs, s)
+    likely = kind if kind in FLOW_KINDS else ""
+    rival, sep = _closest_rival(kind, columns, ll, e, sd, t, s, rate_sd) if likely else ("", math.nan)
+    if sep < 2.0 * s.separable_z ** 2:
+        kind = "unknown"                     # the windows cannot tell it from ``rival`` (:func:`separation`)
     dropout = missing_fraction(recs)
     if kind == "healthy" and dropout > s.dropout_min:
         kind = "speed_dropout"
     conf = {"speed_dropout": prob["healthy"], "unknown": 1.0 - prob["healthy"]}.get(kind, prob.get(kind))
-    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout)
+    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout, likely, rival, sep)
 
 
 #: the kinds whose signature is a finite difference of the steady model: the setting that holds the step

@@ -36,7 +36,9 @@ stamped, on ``twin/health_update``)
     ``residual_window`` residuals, the normalised innovation, the update count,
     the status level, and the fault the classifier of :mod:`.diagnosis` names from the recent settled
     windows (``fault``: its index in :data:`~.diagnosis.KINDS`, −1 not classified) with its probability
-    (``fault_confidence``).  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
+    (``fault_confidence``), the most likely flow kind and its closest rival (``fault_likely``,
+    ``fault_rival``: indices, −1 none) and how well the windows separate them (``fault_separation``, the
+    expected log-likelihood ratio: below the classifier's bound the fault is ``unknown``, "one or the other").  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
     oil temperature, measured and predicted flow, noise, shaft-speed samples received and expected) and
     classified against the twin's steady sensitivities at its operating point; not with ``adapt``.
 Status (``/diagnostics`` ``gerotor_twin: health``)
@@ -62,12 +64,13 @@ from dataclasses import asdict, dataclass, replace
 from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
-from gerotor_twin.twin.diagnosis import FLOW_KINDS, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
+from gerotor_twin.twin.diagnosis import FLOW_KINDS, KIND_CODES, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
-           "LEVELS", "alarm_intervals", "alarm_records", "fault_name", "fault_text"]
+           "LEVELS", "alarm_intervals", "alarm_records", "fault_name", "fault_text",
+           "fault_candidates"]
 
 #: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
@@ -103,7 +106,8 @@ def alarm_records(t, rows: list[dict]) -> list[dict]:
     The classifier names a kind at every update, and within one alarm the naming may change as evidence
     grows (a second operating point seen, the fault grown).  Per interval: ``start_s``, ``end_s`` [s],
     ``level``; ``fault`` and ``confidence``: the kind named at the interval's *last* update and its
-    probability [-] (the most evidence the alarm had); ``first_fault`` and ``first_confidence``: the
+    probability [-] (the most evidence the alarm had), with ``candidates`` the two kinds an ``unknown`` stands
+    for when the windows could not tell them apart (:func:`fault_candidates`); ``first_fault`` and ``first_confidence``: the
     naming at its first update; ``named_at_s`` [s]: the first update from which ``fault`` was named without
     interruption to the interval's end.  Kinds of :data:`~.diagnosis.KINDS`; None when the log carries no
     diagnosis or the update was not classified.
@@ -129,15 +133,27 @@ def alarm_records(t, rows: list[dict]) -> list[dict]:
         while i > i0 and named(rows[i - 1])[0] == fault:
             i -= 1
         out.append({"start_s": a, "end_s": b, "level": name, "fault": fault, "confidence": conf,
-                    "first_fault": first, "first_confidence": first_conf, "named_at_s": t[i]})
+                    "candidates": list(fault_candidates(rows[i1])), "first_fault": first,
+                    "first_confidence": first_conf, "named_at_s": t[i]})
     return out
 
 
-def fault_text(name: str | None, p: float | None) -> str:
-    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was)."""
+def fault_text(name: str | None, p: float | None, candidates=()) -> str:
+    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was); an
+    ``unknown`` that stands for two ``candidates`` the windows could not tell apart: ``unknown (0.99): a or b``."""
     if name in (None, "-"):
         return "-"
-    return name if p is None or not math.isfinite(p) else f"{name} ({p:.2f})"
+    text = name if p is None or not math.isfinite(p) else f"{name} ({p:.2f})"
+    return text + (f": {' or '.join(candidates)}" if candidates else "")
+
+
+def fault_candidates(row: dict) -> tuple[str, ...]:
+    """The two flow kinds an ``unknown`` in one health update stands for (``fault_likely``, ``fault_rival``) when
+    the windows could not tell them apart; () otherwise (a named kind, or a log without them)."""
+    if fault_name(row) != "unknown":
+        return ()
+    names = [fault_name({"fault": row.get(f, -1.0)}) for f in ("fault_likely", "fault_rival")]
+    return tuple(names) if "-" not in names else ()
 
 
 def fault_name(row: dict) -> str:
@@ -150,7 +166,7 @@ HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
                  "reference_efficiency_sd", "calibrated_reference_efficiency", "residual_m3s",
                  "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level", "fault",
-                 "fault_confidence")
+                 "fault_confidence", "fault_likely", "fault_rival", "fault_separation")
 NS = 1_000_000_000
 
 
@@ -507,11 +523,15 @@ class HealthMonitor:
                 self.reference_efficiency(1.0), self.last_residual, mean, rms, e.innovation, float(e.updates),
                 float(self.level()), *self.fault_values()]
 
-    def fault_values(self) -> tuple[float, float]:
+    def fault_values(self) -> tuple[float, ...]:
         """The diagnosis as published: code of the named kind (index in :data:`~.diagnosis.KINDS`, −1: not
-        classified) and its probability [-]."""
+        classified) and its probability [-]; the codes of the most likely flow kind and of its closest rival (−1:
+        none) and their separation [-] (:func:`~.diagnosis.separation`; NaN: none)."""
         d = self.diagnosis
-        return (-1.0, math.nan) if d is None else (float(d.code), d.confidence)
+        if d is None:
+            return -1.0, math.nan, -1.0, -1.0, math.nan
+        code = {"": -1.0, **{k: float(i) for k, i in KIND_CODES.items()}}
+        return float(d.code), d.confidence, code[d.likely], code[d.rival], d.separation
 
     def status(self) -> dict:
         """``diagnostic_msgs/DiagnosticStatus`` dict ``gerotor_twin: health``."""
@@ -530,6 +550,8 @@ class HealthMonitor:
             if self.diagnosis is not None:
                 d = self.diagnosis
                 text += f"; fault: {d.kind} (probability {d.confidence:.2f} over {d.windows} intervals)"
+                if d.kind == "unknown" and d.rival:
+                    text += f": {d.likely} or {d.rival}, which the operating points seen cannot tell apart"
                 if d.kind in FLOW_KINDS:
                     text += f", its loss at the reference point {self.alarm_drop_pt():+.2f} pt (the level's)"
         vals = {k: f"{x:.6g}" for k, x in v.items()}
