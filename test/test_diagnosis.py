@@ -15,7 +15,7 @@ from gerotor_twin.errors import InputError
 from gerotor_twin.twin.diagnosis import (DiagnosisSettings, FLOW_KINDS, KINDS, KIND_CODES, SpeedCounter, SteadySignatures,
                                          WindowRecord, _fit_kind, classify, fitted_residuals, kind_log_likelihood,
                                          missing_fraction, operating_points, point_key, separation)
-from gerotor_twin.twin.health import alarm_records, fault_candidates, fault_text
+from gerotor_twin.twin.health import alarm_records, fault_text, tentative_rival
 from gerotor_twin.offline.diagnosis_bench import (MODEL_CASES as CASES, POINTS, alarm_summary, crossing_time,
                                                  main as bench_main, model_records, reference_loss, severity_for)
 
@@ -208,22 +208,21 @@ def test_separation_is_the_mean_and_half_the_variance_of_the_observed_ratio():
     assert np.mean(obs < 0.0) == pytest.approx(wrong, abs=0.03)
 
 
-def test_kinds_one_speed_cannot_tell_apart_are_not_named(plant):
+def test_kinds_one_speed_cannot_tell_apart_are_named_tentatively(plant):
     """Behaviour: free air and a delivery-pressure offset each change the flow by the same amount at every
-    pressure of one speed: on windows at 1000 rpm and 5 / 25 bar, with either fault, the classifier names neither:
-    ``unknown``, the more likely of the two with the other as its closest rival; with 2500 rpm seen too, air is
-    named."""
+    pressure of one speed: on windows at 1000 rpm and 5 / 25 bar, with either fault, the naming is one of the two,
+    tentative, with the other as its closest rival; with 2500 rpm seen too, air is named firmly."""
     cfg, sig = plant
     one_speed = ((1000, 5), (1000, 25))
+    bound = 2.0 * DiagnosisSettings().separable_z ** 2
     for fault in ({"air_fraction": 0.04}, {"offset_pa": -3e5}):
         recs = _records(cfg, fault, points=one_speed)
         d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
-        best = max(FLOW_KINDS, key=lambda k: d.probability.get(k, 0.0))
-        assert d.kind == "unknown" and {best, d.rival} == {"air_ingress", "pressure_offset"}, (d.rival, d.probability)
-        assert d.separation < 2.0 * DiagnosisSettings().separable_z ** 2
+        assert {d.kind, d.rival} == {"air_ingress", "pressure_offset"}, (d.kind, d.rival, d.probability)
+        assert d.tentative and d.separation < bound
     recs = _records(cfg, {"air_fraction": 0.04}, points=one_speed + ((2500, 25),))
     d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
-    assert d.kind == "air_ingress" and d.separation > 2.0 * DiagnosisSettings().separable_z ** 2, (d.rival, d.separation)
+    assert d.kind == "air_ingress" and not d.tentative and d.separation >= bound, (d.rival, d.separation)
 
 
 def test_unknown_when_nothing_fits(plant):
@@ -261,16 +260,19 @@ def test_bench_counts_alarms_not_bags():
     """Closed form: the bench's fraction is over alarms (two right of three in two tip-wear bags), the other
     alarms by the kind they named, a fault bag whose loss crossed 2 pt without an alarm naming it counted as
     missed, and the healthy bags' alarms kept apart from the fault bags' total."""
-    def bag(kind, named, crossing, first):
-        return {"kind": kind, "alarms": [{"fault": n} for n in named], "crossing_s": crossing,
-                "first_right_s": first, "delay_s": None if crossing is None or first is None else first - crossing}
-    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0), bag("tip_wear", ["tip_wear"], 2.0, 5.0),
-                       bag("air_ingress", [], 2.5, None), bag("healthy", ["lateral_wear"], None, None)])
+    def bag(kind, named, crossing, first, rivals=None):
+        return {"kind": kind, "alarms": [{"fault": n, "rival": r} for n, r in zip(named, rivals or [None] * len(named))],
+                "crossing_s": crossing, "first_right_s": first,
+                "delay_s": None if crossing is None or first is None else first - crossing}
+    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0), bag("tip_wear", ["tip_wear"], 2.0, 5.0, ["lateral_wear"]),
+                       bag("air_ingress", [], 2.5, None), bag("healthy", ["lateral_wear"], None, None),
+                       bag("pressure_offset", ["air_ingress"], 1.0, None, ["pressure_offset"])])
     assert (s["tip_wear"]["alarms"], s["tip_wear"]["right"]) == (3, 2)
     assert s["tip_wear"]["fraction"] == pytest.approx(2 / 3) and s["tip_wear"]["wrong_named"] == {"unknown": 1}
     assert s["tip_wear"]["delay_s"] == [1.0, 3.0] and s["air_ingress"]["missed"] == 1
     assert s["air_ingress"]["fraction"] is None and s["healthy"]["alarms"] == 1
-    assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"]) == (3, 3, 2)
+    assert s["tip_wear"]["tentative"] == [1, 0] and s["pressure_offset"]["tentative"] == [0, 1]
+    assert (s["all"]["bags"], s["all"]["alarms"], s["all"]["right"], s["all"]["tentative"]) == (4, 4, 2, [1, 1])
 
 
 def test_bench_severity_reaches_its_loss(plant):
@@ -358,15 +360,15 @@ def test_alarm_record_names_closed_form():
             row(1, "lateral_wear", 0.7), row(2, "lateral_wear", 0.8)]
     warn, error = alarm_records(t, rows)
     assert warn == {"start_s": 2.0, "end_s": 5.0, "level": "WARN", "fault": "lateral_wear", "confidence": 0.7,
-                    "candidates": [], "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
+                    "rival": None, "first_fault": "unknown", "first_confidence": 1.0, "named_at_s": 4.0}
     assert (error["fault"], error["first_fault"], error["named_at_s"]) == ("lateral_wear", "lateral_wear", 6.0)
-    # an unknown that stands for two kinds the windows cannot tell apart carries them; one without them does not
-    pair = {"fault_likely": KIND_CODES["air_ingress"], "fault_rival": KIND_CODES["pressure_offset"]}
-    rows[-1] = {**row(2, "unknown", 0.99), **pair}
-    assert alarm_records(t, rows)[-1]["candidates"] == ["air_ingress", "pressure_offset"]
-    assert fault_text("unknown", 0.99, ("air_ingress", "pressure_offset")) == "unknown (0.99): air_ingress or pressure_offset"
-    rows[-1] = {**row(2, "unknown", 0.99), "fault_likely": -1.0, "fault_rival": -1.0}
-    assert alarm_records(t, rows)[-1]["candidates"] == [] and fault_candidates({**row(2, "tip_wear", 0.9), **pair}) == ()
+    # a tentative naming carries the kind it was not yet told apart from; a firm one does not
+    rival = {"fault_rival": KIND_CODES["pressure_offset"], "fault_separation": 1.5}
+    rows[-1] = {**row(2, "air_ingress", 0.83), **rival, "fault_tentative": 1.0}
+    assert alarm_records(t, rows)[-1]["rival"] == "pressure_offset"
+    assert fault_text("air_ingress", 0.83, "pressure_offset") == "air_ingress (0.83) or pressure_offset"
+    rows[-1] = {**row(2, "air_ingress", 0.99), **rival, "fault_tentative": 0.0}
+    assert alarm_records(t, rows)[-1]["rival"] is None and tentative_rival(rows[-1]) is None
 
 
 def test_operating_points_by_tolerance_closed_form():

@@ -174,41 +174,33 @@ def test_health_command_lists_alarm_intervals(wear_run, tmp_path, capsys):
     assert [a[0] for a in alarms] == ["WARN", "ERROR"] and alarms[0][2] < alarms[1][1]
 
 
-WEARS = {"tip_wear", "lateral_wear"}
-
-
-def _a_wear(fault, candidates) -> bool:
-    """A wear named, or ``unknown`` standing for the two wears (tip and lateral clearance open together in the wear
-    bag: one of them, or the two that the operating points cannot tell apart)."""
-    return fault in WEARS or (fault == "unknown" and set(candidates) == WEARS)
-
-
 def test_health_command_names_the_fault(wear_run, tmp_path):
     """Behaviour (end to end: emulated bench → run-bag → health): every alarm of the wear bag (tip and lateral
-    clearance opening together) is named a wear, or the two wears, with its probability; the printed alarm lines
-    name it."""
+    clearance opening together) is named a wear, with its probability (a tentative naming: the other wear as its
+    rival); the printed alarm lines name it."""
     from gerotor_twin.cli import main
     js = tmp_path / "h.json"
     assert main(["health", str(wear_run), "--json", str(js)]) == 0
     records = json.loads(js.read_text())["alarm_records"]
     assert [a["level"] for a in records] == ["WARN", "ERROR"]
     for a in records:
-        assert set(a) == {"start_s", "end_s", "level", "fault", "confidence", "candidates", "first_fault",
+        assert set(a) == {"start_s", "end_s", "level", "fault", "confidence", "rival", "first_fault",
                           "first_confidence", "named_at_s"}
         assert a["start_s"] <= a["named_at_s"] <= a["end_s"]
-        assert _a_wear(a["fault"], a["candidates"]) and 0.3 < a["confidence"] <= 1.0, a
+        assert a["fault"] in ("tip_wear", "lateral_wear") and 0.3 < a["confidence"] <= 1.0, a
+        assert a["rival"] in (None, *{"tip_wear", "lateral_wear"} - {a["fault"]}), a
 
 
 def test_diagnostics_name_the_fault(wear_run):
-    """Behaviour: the last /diagnostics health status of the wear run names a wear, or the two wears it cannot tell
-    apart, in its text and values."""
+    """Behaviour: the last /diagnostics health status of the wear run names a wear in its text and values, with
+    its closest rival and their separation."""
     rows = read_topics(wear_run, ["/diagnostics"])["/diagnostics"]
     last = [st for msg in rows.messages for st in msg.status if st.name == HEALTH_STATUS][-1]
     values = {kv.key: kv.value for kv in last.values}
+    assert values["fault"] in ("tip_wear", "lateral_wear")
     assert f"fault: {values['fault']} (probability" in last.message
-    pair = {KINDS[int(float(values[f]))] for f in ("fault_likely", "fault_rival")}
-    assert values["fault"] in WEARS or (values["fault"] == "unknown" and pair == WEARS
-                                        and "which the operating points seen cannot tell apart" in last.message)
+    assert KINDS[int(float(values["fault_rival"]))] in KINDS[1:6] and float(values["fault_separation"]) >= 0.0
+    assert ("tentative: not yet told apart from" in last.message) == (values["fault_tentative"] == "1")
 
 
 @pytest.mark.parametrize("item", ["bogus=1", "adapt=maybe", "warn_pt=x", "warn_pt=-3"])
@@ -250,13 +242,13 @@ def test_report_shows_health_and_alarms(wear_run, tmp_path, monkeypatch):
     eff, leak = ts_health_efficiency(ctx), ts_health_leakage(ctx)
     t, rows = load_health(wear_run)
     logged, records = alarm_intervals(t, rows), alarm_records(t, rows)
-    assert [r["fault"] for r in records] and all(_a_wear(r["fault"], r["candidates"]) for r in records)
-    labels = [f"{r['level']}: {fault_text(r['fault'], r['confidence'], r['candidates'])}" for r in records]
+    assert [r["fault"] for r in records] and all(r["fault"] in ("tip_wear", "lateral_wear") for r in records)
+    labels = [f"{r['level']}: {fault_text(r['fault'], r['confidence'], r['rival'])}" for r in records]
     assert [iv.label for iv in eff.intervals] == labels == [iv.label for iv in leak.intervals]
     assert [r["level"] for r in records] == ["WARN", "ERROR"]
     timeline = fault_timeline(ctx)
     assert "id='tab-fault-timeline'" in page and timeline.heading == eff.heading
-    assert [(r[0], r[3]) for r in timeline.rows] == [(r["level"], fault_text(r["fault"], None, r["candidates"]))
+    assert [(r[0], r[3]) for r in timeline.rows] == [(r["level"], fault_text(r["fault"], None, r["rival"]))
                                                      for r in records]
     assert [r[4] for r in timeline.rows] == pytest.approx([r["confidence"] for r in records])
     assert [iv.t0 for iv in eff.intervals] == pytest.approx([a[1] for a in logged], abs=0.1)     # health_log counts from the first flow input

@@ -59,7 +59,7 @@ def health_summary(twin_log) -> dict | None:
     """The health monitor's final state in a twin log: level name, leakage factor ± sd, reference η_v,
     alarm intervals [s], the fault the classifier named and its probability [-]; ``None`` when the log has
     no health update (no measured flow, never steady)."""
-    from ..twin.health import fault_candidates, fault_name
+    from ..twin.health import fault_name, tentative_rival
     from .health_log import LEVELS, alarm_intervals, load_health
     try:
         t, rows = load_health(twin_log)
@@ -70,7 +70,7 @@ def health_summary(twin_log) -> dict | None:
             "leakage_factor": last["leakage_factor"], "leakage_factor_sd": last["leakage_factor_sd"],
             "reference_efficiency": last["reference_efficiency"],
             "alarms": [list(a) for a in alarm_intervals(t, rows)], "fault": fault_name(last),
-            "fault_confidence": last.get("fault_confidence"), "fault_candidates": list(fault_candidates(last))}
+            "fault_confidence": last.get("fault_confidence"), "fault_rival": tentative_rival(last)}
 
 
 def calibration_summary(bag, config, model: str, out_dir: Path, oil_sensor_tau_s: float = 0.0,

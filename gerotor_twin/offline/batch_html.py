@@ -81,7 +81,7 @@ def _health_cell(h: dict | None) -> str:
 def _fault_html(h: dict) -> str:
     """``, fault: <kind> (p)`` when the log's last update names one (older logs: nothing)."""
     from ..twin.health import fault_text
-    text = fault_text(h.get("fault"), h.get("fault_confidence"), h.get("fault_candidates", ()))
+    text = fault_text(h.get("fault"), h.get("fault_confidence"), h.get("fault_rival"))
     return "" if text == "-" else f", fault: {_e(text)}"
 
 

@@ -41,7 +41,7 @@ import numpy as np
 from ..cli import main as cli_main
 from ..errors import InputError, check_range
 from ..twin.diagnosis import KINDS, WindowRecord
-from ..twin.health import LEVELS, alarm_records, fault_name
+from ..twin.health import LEVELS, alarm_records, fault_name, fault_text
 from .health_log import load_health
 
 __all__ = ["profile_s", "LOSS_PT", "CASES", "TARGET_LOSS", "FIXED_SEVERITY", "severity_for", "severities",
@@ -93,18 +93,22 @@ def model_records(cfg, fault: dict, gain: float = 0.0, rel_sd: float = 0.003, se
 
 
 def model_windows_table() -> str:
-    """Markdown table: per set of operating points and true kind, the named kind and the probabilities > 0.05."""
+    """Markdown table: per set of operating points and true kind, the named kind (a tentative naming: ``kind or
+    rival``), its closest rival with their separation, and the probabilities > 0.05."""
     from ..config import load_config
     from ..twin.diagnosis import SteadySignatures, classify
     cfg = load_config()
     sig = SteadySignatures(cfg)
-    lines = ["| operating points [rpm / bar] | true | named (probability) | other kinds > 0.05 |", "|---|---|---|---|"]
+    lines = ["| operating points [rpm / bar] | true | named (probability) | closest rival (separation) | other kinds > 0.05 |",
+             "|---|---|---|---|---|"]
     for pts in (POINTS, POINTS[:2], POINTS[2:], POINTS[1:2]):
         for kind, (fault, gain) in MODEL_CASES.items():
             recs = model_records(cfg, fault, gain, points=pts)
             d = classify(recs, [sig(r) for r in recs], relinearise=sig.relinearised)
             other = ", ".join(f"{k} {p:.2f}" for k, p in d.probability.items() if p > 0.05 and k != d.kind)
-            lines.append(f"| {', '.join(f'{r}/{b}' for r, b in pts)} | {kind} | {d.kind} ({d.confidence:.2f}) | {other} |")
+            named = fault_text(d.kind, d.confidence, d.rival if d.tentative else None)
+            rival = f"{d.rival} ({d.separation:.1f})" if d.rival else "–"
+            lines.append(f"| {', '.join(f'{r}/{b}' for r, b in pts)} | {kind} | {named} | {rival} | {other} |")
     return "\n".join(lines)
 
 
@@ -309,8 +313,9 @@ def _span(values, fmt: str = "{:.1f}") -> str:
 def alarm_summary(results) -> dict:
     """Per true kind and ``all`` (the fault bags): bags, alarms, alarms naming the true kind at their last update
     (``alarm_records``' ``fault``), their fraction (None without alarms), alarms naming it already at their first
-    update (``first_right``), the kinds the other alarms named, 2-pt crossings [s] and delays [s] (:func:`run_case`),
-    bags whose fault crossed 2 pt but no alarm named it."""
+    update (``first_right``), the kinds the other alarms named, the right and the wrong alarms whose last naming was
+    tentative (``tentative``: [right, wrong]; its ``rival`` not yet excluded), 2-pt crossings [s] and delays [s]
+    (:func:`run_case`), bags whose fault crossed 2 pt but no alarm named it."""
     out = {}
     groups = {k: [r for r in results if r["kind"] == k] for k in CASES}
     groups["all"] = [r for r in results if r["kind"] != "healthy"]
@@ -321,6 +326,8 @@ def alarm_summary(results) -> dict:
                      "first_right": sum(a.get("first_fault") == k for k, a in alarms),
                      "fraction": right / len(alarms) if alarms else None,
                      "wrong_named": dict(collections.Counter(str(a["fault"]) for k, a in alarms if a["fault"] != k)),
+                     "tentative": [sum(bool(a.get("rival")) and (a["fault"] == k) == right_one for k, a in alarms)
+                                   for right_one in (True, False)],
                      "crossing_s": [r["crossing_s"] for r in rs], "delay_s": [r["delay_s"] for r in rs],
                      "missed": sum(r["crossing_s"] is not None and r["first_right_s"] is None for r in rs)}
     return out
@@ -329,8 +336,8 @@ def alarm_summary(results) -> dict:
 def alarm_table(summary: dict) -> str:
     """Markdown table of :func:`alarm_summary`: per kind the alarms naming it, the 2-pt crossings and delays."""
     lines = ["| true kind | bags | alarms | naming the true kind at the alarm's end | at its first update "
-             "| other alarms named | loss crosses 2 pt at [s] | delay to the first alarm update naming it [s] "
-             "| crossed, never named in an alarm |", "|---" * 9 + "|"]
+             "| other alarms named | tentative namings (right / wrong) | loss crosses 2 pt at [s] "
+             "| delay to the first alarm update naming it [s] | crossed, never named in an alarm |", "|---" * 10 + "|"]
     for kind, s in summary.items():
         frac = "–" if s["fraction"] is None else f"{s['right']} ({100 * s['fraction']:.0f} %)"
         first = "–" if s["fraction"] is None else str(s.get("first_right", "–"))
@@ -340,7 +347,9 @@ def alarm_table(summary: dict) -> str:
         delay = _span(s["delay_s"], "{:+.1f}")
         if "…" in delay and len([d for d in s["delay_s"] if d is not None]) > 2:
             delay += f" (median {float(np.median([d for d in s['delay_s'] if d is not None])):+.1f})"
-        lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {first} | {other} | {cross} | {delay} | {s['missed']} |")
+        tent = "–" if s["fraction"] is None else "{} / {}".format(*s["tentative"])
+        lines.append(f"| {kind} | {s['bags']} | {s['alarms']} | {frac} | {first} | {other} | {tent} | {cross} | {delay} "
+                     f"| {s['missed']} |")
     return "\n".join(lines)
 
 
@@ -385,7 +394,8 @@ def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = Non
     for i, (kind, to, seed) in enumerate(cases, 1):
         r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file, health)
         results.append(r)
-        alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {a['fault']}" for a in r["alarms"])
+        alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {fault_text(a['fault'], None, a.get('rival'))}"
+                           for a in r["alarms"])
         cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
         sev = "-" if to is None else f"{to:.4g}"
         print(f"[{i}/{len(cases)} {time.time() - t0:4.0f} s] {kind:20s} {sev:8s} seed {seed}: last {r['named']} "

@@ -14,8 +14,8 @@ import numpy as np
 
 from ..io import McapReadError, open_mcap, read_topics
 from ..io.reader import multiarray_series
-from ..twin.health import (HEALTH_FIELDS, LEVELS, alarm_intervals, alarm_records, fault_candidates, fault_name,
-                           fault_text)
+from ..twin.health import (HEALTH_FIELDS, LEVELS, alarm_intervals, alarm_records, fault_name, fault_text,
+                           tentative_rival)
 
 __all__ = ["load_health", "alarm_intervals", "LEVELS", "cmd_health", "add_parser"]
 
@@ -53,13 +53,13 @@ def cmd_health(args) -> int:
         print(f"  {ti:6.1f}  {r['leakage_factor']:.4f} ± {r['leakage_factor_sd']:.4f}  "
               f"{100 * r['reference_efficiency']:6.2f} ± {100 * r['reference_efficiency_sd']:.2f}  "
               f"{6e4 * r['residual_m3s']:+8.3f}          {LEVELS.get(int(r['level']), '?'):5s}  "
-              f"{fault_text(fault_name(r), r.get('fault_confidence'), fault_candidates(r))}")
+              f"{fault_text(fault_name(r), r.get('fault_confidence'), tentative_rival(r))}")
     alarms = alarm_records(t, rows)
     for a in alarms:
         first = "" if a["first_fault"] == a["fault"] else (f" (first named {fault_text(a['first_fault'], a['first_confidence'])}"
                                                             f"; {a['fault']} from {a['named_at_s']:.1f} s)")
         print(f"  {a['level']} from {a['start_s']:.1f} s to {a['end_s']:.1f} s: "
-              f"{fault_text(a['fault'], a['confidence'], a['candidates'])}{first}")
+              f"{fault_text(a['fault'], a['confidence'], a['rival'])}{first}")
     if not alarms:
         print("  no WARN or ERROR")
     if args.json:

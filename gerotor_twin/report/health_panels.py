@@ -51,7 +51,7 @@ def _alarms(t: np.ndarray, v: np.ndarray) -> list[dict]:
 def _intervals(t: np.ndarray, v: np.ndarray) -> tuple[Interval, ...]:
     out = []
     for a in _alarms(t, v):
-        named = fault_text(a["fault"], a["confidence"], a["candidates"])
+        named = fault_text(a["fault"], a["confidence"], a["rival"])
         out.append(Interval(a["start_s"], a["end_s"], a["level"] if named == "-" else f"{a['level']}: {named}",
                             ALARM_COLORS[a["level"]]))
     return tuple(out)
@@ -106,10 +106,11 @@ def fault_timeline(ctx: ReportContext) -> Table | None:
         return None
     cols = (Column("level", "{}", True), Column("from [s]", "{:.1f}"), Column("to [s]", "{:.1f}"),
             Column("fault named", "{}", True), Column("probability [-]", "{:.2f}"))
-    rows = tuple((a["level"], a["start_s"], a["end_s"], fault_text(a["fault"], None, a["candidates"]), a["confidence"])
+    rows = tuple((a["level"], a["start_s"], a["end_s"], fault_text(a["fault"], None, a["rival"]), a["confidence"])
                  for a in alarms)
     return Table("tab-fault-timeline", HEALTH, cols, rows, f"{ctx.stem}_fault_timeline.csv",
                  "Each interval the monitor spent in WARN or ERROR (times as in the plots) with the fault the "
                  "classifier named at its last update (healthy, a fault kind, or unknown: no kind explains the "
-                 "residuals, or the operating points seen cannot tell two kinds apart, then named beside it) and its probability (for unknown: that of a fault); '-': the "
+                 "residuals, or one operating point only; 'a or b': a tentative naming, a not yet told apart from b at the "
+                 "operating points seen) and its probability (for unknown: that of a fault); '-': the "
                  "log carries no diagnosis.", f"Fault timeline ({twin.label})")

@@ -45,11 +45,12 @@ Decision
     Probabilities: softmax of the log-likelihoods over the candidates (equal prior odds).  ``unknown``
     also when the best kind's innovations have χ² > n + ``chi2_z``·√(2n) (no kind explains the
     residuals), and when a flow kind wins on windows at fewer than two operating points (speed within
-    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ;
-    more generally, when the windows do not separate the most likely flow kind from its closest candidate
-    rival: their expected log-likelihood ratio (:func:`separation`) below 2·``separable_z``², at which noise
-    alone would reverse the call more often than Φ(−z) (10 %) — air ingress and a pressure offset at one speed.
-    The confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
+    ``point_speed_tol``, delivery pressure within ``point_pressure_pa``: :func:`operating_points`): there every kind fits the one residual and only the priors differ.
+    The confidence of ``unknown`` is the probability of a fault (1 − that of ``healthy``).  A named flow kind
+    comes with its closest candidate rival and their expected log-likelihood ratio (:func:`separation`); below
+    2·``separable_z``² noise alone would reverse the call more often than Φ(−z) (10 %), and the naming is
+    *tentative* (air ingress and a pressure offset at one speed; tip and lateral wear where the tip's Couette
+    share is small).  ``speed_dropout`` is input accounting, not a flow signature: the fraction of shaft-speed
     samples missing over the horizon (:func:`missing_fraction`); above ``dropout_min`` it is named when
     the flow residuals are explained by ``healthy`` (confidence: that probability).
 """
@@ -126,9 +127,10 @@ class DiagnosisSettings:
     ``pressure_step_pa`` [Pa]; ``relinearise`` [-]: at most this many re-linearisations of a kind's signature at
     its fitted size (0: the signatures at the steps only; module doc); ``point_speed_tol`` [-] (relative) and
     ``point_pressure_pa`` [Pa]: windows within both of each other are one operating point
-    (:func:`operating_points`; the health monitor passes its steady-window tolerances); ``separable_z`` [-]: a flow
-    kind is named only when the windows separate it from every other candidate by an expected log-likelihood ratio
-    of at least 2·z² (:func:`separation`; 1.2816: noise alone reverses the ratio's sign at most 10 % of the time).
+    (:func:`operating_points`; the health monitor passes its steady-window tolerances); ``separable_z`` [-]: a named
+    flow kind is firm when the windows separate it from every other candidate by an expected log-likelihood ratio
+    of at least 2·z² (:func:`separation`; 1.2816: noise alone reverses the ratio's sign at most 10 % of the time),
+    else tentative.
     """
     horizon: int = 30
     prior_sd: float = 0.2
@@ -178,14 +180,13 @@ class Diagnosis:
         Windows used.
     dropout : float
         Fraction of the shaft-speed samples missing [-].
-    likely : str
-        The most likely flow kind when one was the most likely candidate ('' otherwise): ``kind`` itself, or the
-        kind ``unknown`` stands for when the windows cannot tell it from ``rival``.
     rival : str
-        The candidate flow kind closest to ``likely`` at the windows seen ('' when none was compared).
+        When a flow kind is named: the candidate flow kind the windows separate least from it ('' otherwise).
     separation : float
-        Their expected log-likelihood ratio (:func:`separation`) [-]; below 2·``separable_z``² the kind is
-        ``unknown``: the windows cannot tell the two apart.
+        Their expected log-likelihood ratio (:func:`separation`) [-] (NaN: no rival).
+    tentative : bool
+        The separation is below 2·``separable_z``²: the windows cannot yet tell the named kind from ``rival``
+        (the name is the more probable of the two, by the probability given).
     """
     kind: str
     confidence: float
@@ -195,9 +196,9 @@ class Diagnosis:
     chi2: float
     windows: int
     dropout: float = 0.0
-    likely: str = ""
     rival: str = ""
     separation: float = math.nan
+    tentative: bool = False
 
     @property
     def code(self) -> int:
@@ -483,15 +484,13 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
     ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
     chi2["suction_restriction"] = chi2["healthy"]
     kind, prob, best = _decide(ll, chi2, recs, s)
-    likely = kind if kind in FLOW_KINDS else ""
-    rival, sep = _closest_rival(kind, columns, ll, e, sd, t, s, rate_sd) if likely else ("", math.nan)
-    if sep < 2.0 * s.separable_z ** 2:
-        kind = "unknown"                     # the windows cannot tell it from ``rival`` (:func:`separation`)
+    rival, sep = _closest_rival(kind, columns, ll, e, sd, t, s, rate_sd) if kind in FLOW_KINDS else ("", math.nan)
+    tentative = sep < 2.0 * s.separable_z ** 2            # the windows cannot yet tell it from ``rival``
     dropout = missing_fraction(recs)
     if kind == "healthy" and dropout > s.dropout_min:
         kind = "speed_dropout"
     conf = {"speed_dropout": prob["healthy"], "unknown": 1.0 - prob["healthy"]}.get(kind, prob.get(kind))
-    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout, likely, rival, sep)
+    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout, rival, sep, tentative)
 
 
 #: the kinds whose signature is a finite difference of the steady model: the setting that holds the step

@@ -36,9 +36,9 @@ stamped, on ``twin/health_update``)
     ``residual_window`` residuals, the normalised innovation, the update count,
     the status level, and the fault the classifier of :mod:`.diagnosis` names from the recent settled
     windows (``fault``: its index in :data:`~.diagnosis.KINDS`, −1 not classified) with its probability
-    (``fault_confidence``), the most likely flow kind and its closest rival (``fault_likely``,
-    ``fault_rival``: indices, −1 none) and how well the windows separate them (``fault_separation``, the
-    expected log-likelihood ratio: below the classifier's bound the fault is ``unknown``, "one or the other").  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
+    (``fault_confidence``); for a fault of the flow, the kind the windows separate least from it (``fault_rival``,
+    its index, −1 none), how well (``fault_separation``, the expected log-likelihood ratio) and whether that is
+    below the classifier's bound (``fault_tentative`` 1: the naming is tentative).  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
     oil temperature, measured and predicted flow, noise, shaft-speed samples received and expected) and
     classified against the twin's steady sensitivities at its operating point; not with ``adapt``.
 Status (``/diagnostics`` ``gerotor_twin: health``)
@@ -70,7 +70,7 @@ from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
            "LEVELS", "alarm_intervals", "alarm_records", "fault_name", "fault_text",
-           "fault_candidates"]
+           "tentative_rival"]
 
 #: names of the health levels as logged in ``twin/health`` (``diagnostic_msgs/DiagnosticStatus`` levels)
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
@@ -106,8 +106,8 @@ def alarm_records(t, rows: list[dict]) -> list[dict]:
     The classifier names a kind at every update, and within one alarm the naming may change as evidence
     grows (a second operating point seen, the fault grown).  Per interval: ``start_s``, ``end_s`` [s],
     ``level``; ``fault`` and ``confidence``: the kind named at the interval's *last* update and its
-    probability [-] (the most evidence the alarm had), with ``candidates`` the two kinds an ``unknown`` stands
-    for when the windows could not tell them apart (:func:`fault_candidates`); ``first_fault`` and ``first_confidence``: the
+    probability [-] (the most evidence the alarm had), with ``rival`` the kind it was not yet told apart from
+    when that naming was tentative (:func:`tentative_rival`; else None); ``first_fault`` and ``first_confidence``: the
     naming at its first update; ``named_at_s`` [s]: the first update from which ``fault`` was named without
     interruption to the interval's end.  Kinds of :data:`~.diagnosis.KINDS`; None when the log carries no
     diagnosis or the update was not classified.
@@ -133,27 +133,25 @@ def alarm_records(t, rows: list[dict]) -> list[dict]:
         while i > i0 and named(rows[i - 1])[0] == fault:
             i -= 1
         out.append({"start_s": a, "end_s": b, "level": name, "fault": fault, "confidence": conf,
-                    "candidates": list(fault_candidates(rows[i1])), "first_fault": first,
+                    "rival": tentative_rival(rows[i1]), "first_fault": first,
                     "first_confidence": first_conf, "named_at_s": t[i]})
     return out
 
 
-def fault_text(name: str | None, p: float | None, candidates=()) -> str:
-    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was); an
-    ``unknown`` that stands for two ``candidates`` the windows could not tell apart: ``unknown (0.99): a or b``."""
+def fault_text(name: str | None, p: float | None, rival: str | None = None) -> str:
+    """A fault the classifier named, with its probability ``p`` [-]: ``kind (0.93)`` (``-`` when none was); a
+    tentative naming, not yet told apart from ``rival``: ``kind (0.71) or rival``."""
     if name in (None, "-"):
         return "-"
     text = name if p is None or not math.isfinite(p) else f"{name} ({p:.2f})"
-    return text + (f": {' or '.join(candidates)}" if candidates else "")
+    return text + (f" or {rival}" if rival else "")
 
 
-def fault_candidates(row: dict) -> tuple[str, ...]:
-    """The two flow kinds an ``unknown`` in one health update stands for (``fault_likely``, ``fault_rival``) when
-    the windows could not tell them apart; () otherwise (a named kind, or a log without them)."""
-    if fault_name(row) != "unknown":
-        return ()
-    names = [fault_name({"fault": row.get(f, -1.0)}) for f in ("fault_likely", "fault_rival")]
-    return tuple(names) if "-" not in names else ()
+def tentative_rival(row: dict) -> str | None:
+    """The kind a tentative naming in one health update was not yet told apart from (``fault_rival`` when
+    ``fault_tentative``); None otherwise (a firm naming, or a log without them)."""
+    rival = fault_name({"fault": row.get("fault_rival", -1.0)})
+    return rival if row.get("fault_tentative", 0.0) == 1.0 and rival != "-" else None
 
 
 def fault_name(row: dict) -> str:
@@ -166,7 +164,7 @@ HEALTH_STATUS = "gerotor_twin: health"
 HEALTH_FIELDS = ("leakage_factor", "leakage_factor_sd", "clearance_factor", "reference_efficiency",
                  "reference_efficiency_sd", "calibrated_reference_efficiency", "residual_m3s",
                  "residual_mean_m3s", "residual_rms_m3s", "innovation", "updates", "level", "fault",
-                 "fault_confidence", "fault_likely", "fault_rival", "fault_separation")
+                 "fault_confidence", "fault_rival", "fault_separation", "fault_tentative")
 NS = 1_000_000_000
 
 
@@ -525,13 +523,13 @@ class HealthMonitor:
 
     def fault_values(self) -> tuple[float, ...]:
         """The diagnosis as published: code of the named kind (index in :data:`~.diagnosis.KINDS`, −1: not
-        classified) and its probability [-]; the codes of the most likely flow kind and of its closest rival (−1:
-        none) and their separation [-] (:func:`~.diagnosis.separation`; NaN: none)."""
+        classified) and its probability [-]; the code of its closest rival (−1: none), their separation [-]
+        (:func:`~.diagnosis.separation`; NaN: none) and 1.0 when the naming is tentative (else 0.0)."""
         d = self.diagnosis
         if d is None:
-            return -1.0, math.nan, -1.0, -1.0, math.nan
-        code = {"": -1.0, **{k: float(i) for k, i in KIND_CODES.items()}}
-        return float(d.code), d.confidence, code[d.likely], code[d.rival], d.separation
+            return -1.0, math.nan, -1.0, math.nan, 0.0
+        rival = float(KIND_CODES[d.rival]) if d.rival else -1.0
+        return float(d.code), d.confidence, rival, d.separation, float(d.tentative)
 
     def status(self) -> dict:
         """``diagnostic_msgs/DiagnosticStatus`` dict ``gerotor_twin: health``."""
@@ -550,8 +548,9 @@ class HealthMonitor:
             if self.diagnosis is not None:
                 d = self.diagnosis
                 text += f"; fault: {d.kind} (probability {d.confidence:.2f} over {d.windows} intervals)"
-                if d.kind == "unknown" and d.rival:
-                    text += f": {d.likely} or {d.rival}, which the operating points seen cannot tell apart"
+                if d.tentative:
+                    text += (f", tentative: not yet told apart from {d.rival} at the operating points seen "
+                             f"(separation {d.separation:.1f})")
                 if d.kind in FLOW_KINDS:
                     text += f", its loss at the reference point {self.alarm_drop_pt():+.2f} pt (the level's)"
         vals = {k: f"{x:.6g}" for k, x in v.items()}
