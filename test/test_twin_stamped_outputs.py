@@ -204,3 +204,43 @@ def test_flow_samples_window_and_pruning():
     assert s.between(0, 100) == [2.0]
     s.drop_before(100)
     assert s.between(0, 1000) == [] and s.last_before(1000) is None
+
+
+def _residuals_after_a_step(tau_s: float) -> list[float]:
+    """Residuals of a perfect model whose flow steps from 1e-4 to 2e-4 m³/s at 0.1 s, measured by a meter of
+    time constant 0.05 s sampled every ms (its reading the exact lag of the true flow), revolutions of 10 ms;
+    ``tau_s``: the residual's meter lag."""
+    from gerotor_twin.hydraulics.meter import lag_step
+    from gerotor_twin.twin.outputs import FLOW_SUMMARY, OutputMessage
+    from gerotor_twin.twin.residual import FlowResidual
+    q_th, rev_ms = 2.5e-4, 10
+    res = FlowResidual(q_th * rev_ms / 1e3, stale_s=1.0, flow_sensor_tau_s=tau_s)
+    reading, out = 1e-4, []
+    for t in range(1, 301):
+        true = 1e-4 if t <= 100 else 2e-4
+        reading = lag_step(reading, true, 1e-3, 0.05)
+        res.add_flow(reading, t * MS)
+        if t % rev_ms == 0:
+            summary = OutputMessage(FLOW_SUMMARY, "", t * MS, {"data": [true, q_th, q_th - true, true / q_th]})
+            out += [dict(zip(RESIDUAL_FIELDS, o.msg["position"]))["delivery_residual_m3s"]
+                    for o in res.observe([summary]) if o.topic == "twin/flow_residual"]
+    return out
+
+
+def test_residual_read_through_the_meter_lag():
+    """Behaviour: after a step of the flow a lagging meter (τ = 0.05 s, 5 revolutions) makes the residual as received
+    swing by up to most of the step (1e-4 m³/s) though the model is exact; with the meter's lag told to the residual
+    the predictions are read through it and the largest residual after the step falls to about the revolution's
+    half-length over τ of it (the meter's mean over a revolution against the lagged prediction at its end: 0.1)."""
+    plain, lagged = _residuals_after_a_step(0.0), _residuals_after_a_step(0.05)
+    assert len(plain) == len(lagged) == 30 and max(map(abs, plain[:10])) < 1e-12 and max(map(abs, lagged[:10])) < 1e-12
+    assert max(map(abs, plain)) > 0.5e-4
+    assert max(map(abs, lagged)) < 0.15 * max(map(abs, plain))
+
+
+def test_core_gives_the_residual_the_health_meter_lag(model):
+    """The core reads its residual through the meter lag of its health settings (one meter, one setting)."""
+    from gerotor_twin.twin.health import HealthSettings
+    assert TwinCore(model, TwinSettings()).residual.meter.tau_s == 0.0
+    core = TwinCore(model, TwinSettings(), health=HealthSettings(flow_sensor_tau_s=0.2))
+    assert core.residual.meter.tau_s == 0.2

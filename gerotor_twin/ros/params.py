@@ -158,7 +158,8 @@ PARAMETERS: tuple[Param, ...] = (
     Param("health_settle_s", 1.0, "speed and pressure steady this long before a window counts [s] "
                                   "(>= 5 flow-meter time constants)", 0.0, 600.0),
     Param("health_flow_sensor_tau_s", 0.0, "time constant of the bench's flow meter [s]: the model's flows are "
-                                           "read through the same lag before the windows compare them (0: off)",
+                                           "read through the same lag before the windows and twin/flow_residual "
+                                           "compare them (0: off)",
           0.0, 60.0),
     Param("health_drift_per_sqrt_s", 0.02, "random-walk drift of the leakage factor [1/sqrt(s)]: tracking speed "
                                            "vs noise", 0.0, 10.0),

@@ -161,7 +161,7 @@ class TwinCore:
         self._last_tick: TickResult | None = None
         self.health = HealthMonitor(model, health or HealthSettings(), background=diagnosis_in_background)
         #: measured against predicted revolution-mean flow (``twin/flow_residual``)
-        self.residual = FlowResidual(model.displacement, s.stale_timeout_s)
+        self.residual = FlowResidual(model.displacement, s.stale_timeout_s, self.health.settings.flow_sensor_tau_s)
         self.driver.jump_back_listeners += [self.residual.clock_jumped_back, self.health.clock_jumped_back]
         #: result of :meth:`measure_startup_rtf` (None: not measured)
         self.startup_rtf: StartupRtf | None = None

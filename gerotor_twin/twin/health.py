@@ -18,7 +18,7 @@ When it is updated (robust to ramps and to the flow meter's lag)
     constants: the meter has caught up), with at least one revolution summary and
     ``min_flow_samples`` measured flow samples.  Ramps and steps are ignored.  With
     ``flow_sensor_tau_s`` > 0 the model's revolution means are read through the meter's
-    first-order lag before they are averaged (:meth:`HealthMonitor._read_through_meter`),
+    first-order lag before they are averaged (:class:`~.meter_reading.MeterReading`),
     so a window in which the meter still settles compares like with like.
     Measurement: y = mean theoretical − mean measured flow; regressor: mean predicted
     loss / the factor the model runs with; noise variance
@@ -66,6 +66,7 @@ from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import FLOW_KINDS, KIND_CODES, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
 from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
+from gerotor_twin.twin.meter_reading import MeterReading
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
@@ -319,7 +320,9 @@ class HealthMonitor:
         self.diagnosis: Diagnosis | None = None
         self._signature_of = None
         self._speed = SpeedCounter()
-        self._meter: tuple | None = None      # (stamp [ns], the model's flows as the meter reads them)
+        #: the model's revolution-mean delivery, theoretical flow and loss [m³/s] as the bench's flow meter reads them
+        #: (the meter reads q_th − k·loss as lag(q_th) − k·lag(loss)), so that a window compares like with like
+        self._meter = MeterReading(s.flow_sensor_tau_s)
 
     # ------------------------------------------------------------- inputs
     def add_flow(self, value_m3s: float, receive_ns: int) -> None:
@@ -334,7 +337,7 @@ class HealthMonitor:
         """The clock went back to ``now_ns`` [ns] (a bag loop): flow samples received after it are forgotten."""
         self._flow.forget_after(now_ns)
         self._speed.forget_after(now_ns)
-        self._meter = None
+        self._meter.reset()
 
     def observe(self, now_ns: int, inputs, messages) -> list[OutputMessage]:
         """After a tick: track steadiness, collect revolution summaries, update at window ends."""
@@ -350,7 +353,7 @@ class HealthMonitor:
         for msg in messages:
             if msg.topic != FLOW_SUMMARY:
                 continue
-            q, qth, loss = self._read_through_meter(msg.stamp_ns, msg.msg["data"][:3])
+            q, qth, loss = self._meter.read(msg.stamp_ns, msg.msg["data"][:3])
             if msg.stamp_ns >= w.start_ns:
                 w.revs += 1
                 w.q_pred += q
@@ -360,23 +363,6 @@ class HealthMonitor:
             return []
         self._win = _Window(now_ns)
         return self._close(w, now_ns)
-
-    def _read_through_meter(self, stamp_ns: int, values) -> tuple:
-        """A revolution's mean delivery, theoretical flow and loss [m³/s] as the bench's flow meter reads them: a
-        first-order lag of ``flow_sensor_tau_s`` (:func:`~gerotor_twin.hydraulics.meter.lag_step`, each mean held
-        over its revolution), so that the window compares the meter's reading with the model's flow read alike,
-        settled or not (the loss read alike too: the meter reads q_th − k·loss as lag(q_th) − k·lag(loss)).
-        0: the values as they are."""
-        tau = self.settings.flow_sensor_tau_s
-        values = tuple(float(v) for v in values)
-        if not tau > 0:
-            return values
-        from gerotor_twin.hydraulics.meter import lag_step     # not at import: hydraulics' package imports numba
-        prev = self._meter
-        if prev is not None and stamp_ns >= prev[0]:
-            values = tuple(lag_step(y, v, (stamp_ns - prev[0]) / NS, tau) for y, v in zip(prev[1], values))
-        self._meter = (stamp_ns, values)
-        return values
 
     def _track_steady(self, now_ns: int, inputs) -> None:
         s = self.settings

@@ -17,9 +17,13 @@ What is compared
 Without a flow meter
     Nothing is published; the ``gerotor_twin: model`` status says so (``flow_residual``).
 The meter's own lag
-    The measured flow is compared as received: a meter with a time constant lags the
-    prediction during speed or pressure changes, which shows in the residual for a few time
-    constants after each change (the health monitor, :mod:`.health`, uses settled intervals only).
+    With ``flow_sensor_tau_s`` > 0 (the health settings' bench flow meter, node parameter
+    ``health_flow_sensor_tau_s``) the predicted delivery and theoretical flow are read through the
+    meter's first-order lag (:class:`~.meter_reading.MeterReading`) before they are compared, so the
+    residual stays a model error during speed and pressure changes; the published predicted flow and
+    efficiencies are then those read through it (η = flow / the lagged theoretical flow).  With 0 the
+    measured flow is compared as received, and a meter with a time constant lags the prediction for a
+    few time constants after each change.
 """
 from __future__ import annotations
 
@@ -27,6 +31,7 @@ import collections
 import math
 
 from gerotor_twin.twin import outputs as O
+from gerotor_twin.twin.meter_reading import MeterReading
 from gerotor_twin.twin.outputs import OutputMessage
 
 __all__ = ["FlowSamples", "FlowResidual"]
@@ -86,12 +91,15 @@ class FlowResidual:
         Volume per revolution [m³].
     stale_s : float
         A held flow sample older than this is not used [s] (the twin's ``stale_timeout_s``).
+    flow_sensor_tau_s : float, optional
+        The flow meter's time constant [s]: the predictions are read through its lag (module doc; 0: off).
     """
 
-    def __init__(self, displacement: float, stale_s: float):
+    def __init__(self, displacement: float, stale_s: float, flow_sensor_tau_s: float = 0.0):
         self.displacement = float(displacement)
         self.stale_ns = int(stale_s * NS)
         self.samples = FlowSamples()
+        self.meter = MeterReading(flow_sensor_tau_s)
         self.published = 0          #: residuals published [-]
         self.held = 0               #: of which with a held sample (none received in the revolution) [-]
         self.without_flow = 0       #: revolutions without a usable measured flow [-]
@@ -107,6 +115,7 @@ class FlowResidual:
     def clock_jumped_back(self, now_ns: int) -> None:
         """The clock went back to ``now_ns`` [ns]: samples received after it belong to another pass."""
         self.samples.forget_after(now_ns)
+        self.meter.reset()
 
     def observe(self, messages) -> list[OutputMessage]:
         """The ``twin/flow_residual`` messages for the revolution summaries among ``messages``."""
@@ -131,6 +140,9 @@ class FlowResidual:
         if not q_th > 0:
             return []
         start_ns = end_ns - int(round(self.displacement / q_th * NS))
+        if self.meter.tau_s > 0:                       # the predictions as the meter reads them
+            q_pred, q_th = self.meter.read(end_ns, (q_pred, q_th))
+            eta_pred = q_pred / q_th
         got = self.measured(start_ns, end_ns)
         self.samples.drop_before(start_ns, keep_last=True)
         if got is None:
