@@ -225,6 +225,24 @@ def test_kinds_one_speed_cannot_tell_apart_are_named_tentatively(plant):
     assert d.kind == "air_ingress" and not d.tentative and d.separation >= bound, (d.rival, d.separation)
 
 
+def test_separability_of_the_operating_points(plant, capsys):
+    """Behaviour (``--separability``, before any bag): at one operating point no pair of flow kinds is separable;
+    at one speed air and a pressure offset separate by a thirtieth of what the four points give, where they are
+    separable; Δ grows with the fault's size squared (θ 0.04 → 0.08: ≈ 4×, the priors aside)."""
+    from gerotor_twin.offline.separability import separability
+    cfg, _ = plant
+    bound = 2.0 * DiagnosisSettings().separable_z ** 2
+    one = separability(cfg, [(1000, 25)])
+    assert max(v for row in one.values() for v in row.values()) < bound
+    speed = separability(cfg, [(1000, 5), (1000, 25)])
+    four, double = separability(cfg, POINTS), separability(cfg, POINTS, loss=0.08)
+    for a, b in (("air_ingress", "pressure_offset"), ("pressure_offset", "air_ingress")):
+        assert speed[a][b] < four[a][b] / 30.0 and four[a][b] > bound, (speed[a][b], four[a][b])
+    assert double["air_ingress"]["pressure_offset"] / four["air_ingress"]["pressure_offset"] == pytest.approx(4.0, rel=0.1)
+    assert bench_main(["--separability", "0.04"]) == 0
+    assert "| true \\ rival | tip_wear |" in capsys.readouterr().out
+
+
 def test_unknown_when_nothing_fits(plant):
     """Behaviour: a residual no candidate makes (flow gained at high pressure only, lost at low) is "unknown"."""
     cfg, sig = plant
@@ -297,7 +315,8 @@ def test_bench_severity_reaches_its_loss(plant):
     (["--ramp", "-1"], "--ramp = -1.0 is invalid; allowed: [0, 10000] s"),
     (["--config", "/nonexistent/pump.yaml"], "--config = '/nonexistent/pump.yaml' is invalid"),
     (["--profile-file", "/nonexistent/profile.yaml"], "--profile-file = '/nonexistent/profile.yaml' is invalid"),
-    (["--settle", "-1"], "--settle = -1.0 is invalid; allowed: [0, 600] s")])
+    (["--settle", "-1"], "--settle = -1.0 is invalid; allowed: [0, 600] s"),
+    (["--separability", "2"], "--separability = 2.0 is invalid; allowed: [0.0001, 0.5]")])
 def test_bench_bad_input(tmp_path, capsys, argv, message):
     """Bad input: the bench refuses a bad option in one line naming it, the value and the allowed range (exit 2)
     before any bag is made."""

@@ -403,6 +403,17 @@ def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = Non
     return results
 
 
+def _separability(cfg, loss: float) -> int:
+    """``--separability``: the table of :mod:`.separability` on the pump's diagnosis profile."""
+    from ..twin.diagnosis import DiagnosisSettings
+    from .separability import profile_points, separability, separability_table
+    points = profile_points(cfg)
+    print(f"separation of the flow kinds at a {100 * loss:g} pt loss, 3 windows at each of "
+          + ", ".join(f"{r:g} rpm / {b:g} bar" for r, b in points) + ":")
+    print(separability_table(separability(cfg, points, loss), 2.0 * DiagnosisSettings().separable_z ** 2))
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m gerotor_twin.offline.diagnosis_bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -425,6 +436,10 @@ def main(argv=None) -> int:
                         "default 0: off)")
     p.add_argument("--model-windows", action="store_true",
                    help="classify windows of the twin's own model on sets of operating points instead (seconds)")
+    p.add_argument("--separability", type=float, default=None, metavar="LOSS",
+                   help="instead, how well the classifier could tell each flow kind from every other on the "
+                        "profile's points of the pump (--config), each fault at this loss at the reference point, "
+                        "e.g. 0.04 [-] (seconds; gerotor_twin.offline.separability)")
     args = p.parse_args(argv)
     if args.model_windows:
         print(model_windows_table())
@@ -433,6 +448,8 @@ def main(argv=None) -> int:
     from ..config import load_config
     try:
         cfg = load_config(args.config)
+        if args.separability is not None:
+            return _separability(cfg, check_range("--separability", args.separability, 1e-4, 0.5))
         length = profile_s(args.profile_file)
         if args.profile_file is not None:
             load_profile_file(args.profile_file, cfg.range)          # inside the pump's range, or refused here
