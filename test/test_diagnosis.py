@@ -412,7 +412,7 @@ def test_reference_loss_is_the_fault_loss_at_the_reference_point(plant, kind, fa
     −g·η_v; an offset: the pump at the pressure read less the offset), within 10 % and 0.2 pt.  With the signatures'
     reference at the config's reference oil temperature instead, the wears' θ read 0.65–0.66 of it and the offset's
     0.57 (measured); a transducer reading 2 bar low, +2.7 pt."""
-    from gerotor_twin.offline.diagnosis_bench import _flow
+    from gerotor_twin.offline.model_windows import _flow
     cfg, _ = plant
     sig = SteadySignatures(cfg)                     # the monitor's default reference point, 50 °C oil
     recs = _records(cfg, fault, gain)

@@ -13,6 +13,7 @@ those at their finite-difference steps (not re-linearised at the fault's size): 
 from __future__ import annotations
 
 from ..twin.diagnosis import FLOW_KINDS, DiagnosisSettings, SteadySignatures, separation
+from .model_windows import model_records
 
 __all__ = ["separability", "separability_table", "profile_points"]
 
@@ -34,7 +35,6 @@ def separability(cfg, points, loss: float = 0.04, windows: int = 3, rel_sd: floa
     [rpm, bar] at 50 °C oil on the pump ``cfg``, the true kind a at θ = ``loss`` [-], noise ``rel_sd`` of the flow
     [-]; the reference point is the health monitor's, inside the pump's range."""
     from ..twin.health import HealthSettings
-    from .diagnosis_bench import model_records
     s = settings or DiagnosisSettings()
     hs = HealthSettings().within(cfg.range)
     sig = SteadySignatures(cfg, settings=s, reference=(hs.reference_rpm, hs.reference_bar, hs.reference_oil_c))
