@@ -272,3 +272,22 @@ def test_the_level_judges_the_named_faults_loss(monitor):
     for kind in ("unknown", "healthy"):
         monitor.diagnosis = Diagnosis(kind, 0.99, {}, {}, {"flowmeter_drift": -0.06}, 1.0, 12)
         assert monitor.alarm_drop_pt() == monitor.drop_pt() and monitor.level() == m.DIAG_OK
+
+
+def test_a_tentative_naming_is_judged_by_the_smaller_loss(monitor):
+    """Closed form: the level's loss is the named fault's at its fitted size; when the naming is tentative (its rival
+    not yet excluded) the smaller of the two kinds' losses, the one the windows support whichever is the fault."""
+    from gerotor_twin.twin.diagnosis import Diagnosis
+
+    class Losses:                       # SteadySignatures.reference_loss with θ read as the loss itself
+        @staticmethod
+        def reference_loss(kind, theta):
+            return theta
+    monitor._signature_of = Losses()
+    theta = {"air_ingress": 0.07, "pressure_offset": 0.03}
+    firm = Diagnosis("air_ingress", 0.9, {}, {}, theta, 1.0, 8, rival="pressure_offset", separation=9.0)
+    monitor.diagnosis = firm
+    assert monitor.alarm_drop_pt() == pytest.approx(7.0)
+    monitor.diagnosis = Diagnosis("air_ingress", 0.8, {}, {}, theta, 1.0, 8, rival="pressure_offset",
+                                  separation=1.5, tentative=True)
+    assert monitor.alarm_drop_pt() == pytest.approx(3.0)

@@ -480,10 +480,15 @@ class HealthMonitor:
         The leakage factor reads every loss as leakage, whose share grows with the delivery pressure, so it
         extrapolates a meter gain, air or a pressure offset seen at a low pressure to a larger loss at the
         reference point and one seen at a high pressure to a smaller one: the level would change with the
-        operating point under a constant fault."""
+        operating point under a constant fault.  A tentative naming (the windows cannot yet tell the named kind
+        from its rival, :attr:`~.diagnosis.Diagnosis.tentative`) is judged by the smaller of the two kinds' losses
+        at their fitted sizes: the loss the windows support whichever of them is the fault."""
         d, sig = self.diagnosis, self._signature_of
         if d is not None and sig is not None and d.kind in FLOW_KINDS and d.kind in d.parameter:
-            return 100.0 * sig.reference_loss(d.kind, d.parameter[d.kind])
+            loss = sig.reference_loss(d.kind, d.parameter[d.kind])
+            if d.tentative and d.rival in d.parameter:
+                loss = min(loss, sig.reference_loss(d.rival, d.parameter[d.rival]))
+            return 100.0 * loss
         return self.drop_pt()
 
     def level(self) -> int:
