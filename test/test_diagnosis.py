@@ -238,7 +238,8 @@ def test_separability_of_the_operating_points(plant, capsys):
     four, double = separability(cfg, POINTS), separability(cfg, POINTS, loss=0.08)
     for a, b in (("air_ingress", "pressure_offset"), ("pressure_offset", "air_ingress")):
         assert speed[a][b] < four[a][b] / 30.0 and four[a][b] > bound, (speed[a][b], four[a][b])
-    assert double["air_ingress"]["pressure_offset"] / four["air_ingress"]["pressure_offset"] == pytest.approx(4.0, rel=0.1)
+    ratio = double["air_ingress"]["pressure_offset"] / four["air_ingress"]["pressure_offset"]
+    assert ratio == pytest.approx(4.0, rel=0.1)
     assert bench_main(["--separability", "0.04"]) == 0
     assert "| true \\ rival | tip_wear |" in capsys.readouterr().out
 
@@ -282,7 +283,8 @@ def test_bench_counts_alarms_not_bags():
         return {"kind": kind, "alarms": [{"fault": n, "rival": r} for n, r in zip(named, rivals or [None] * len(named))],
                 "crossing_s": crossing, "first_right_s": first,
                 "delay_s": None if crossing is None or first is None else first - crossing}
-    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0), bag("tip_wear", ["tip_wear"], 2.0, 5.0, ["lateral_wear"]),
+    s = alarm_summary([bag("tip_wear", ["tip_wear", "unknown"], 3.0, 4.0),
+                       bag("tip_wear", ["tip_wear"], 2.0, 5.0, ["lateral_wear"]),
                        bag("air_ingress", [], 2.5, None), bag("healthy", ["lateral_wear"], None, None),
                        bag("pressure_offset", ["air_ingress"], 1.0, None, ["pressure_offset"])])
     assert (s["tip_wear"]["alarms"], s["tip_wear"]["right"]) == (3, 2)

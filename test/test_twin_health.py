@@ -72,7 +72,11 @@ def test_tracks_leakage_factor_on_steady_operation(monitor):
     assert abs(est.k - 1.3) < 2 * est.sd + 1e-3 and est.updates >= 8
     drop = 100 * 0.3 * monitor.loss_ref / monitor.qth_ref
     assert monitor.drop_pt() == pytest.approx(drop, abs=0.2)
-    want = m.DIAG_ERROR if drop > 5 else m.DIAG_WARN if drop > 2 else m.DIAG_OK
+    # one operating point: the level judges the smallest loss a candidate kind carries to the reference point,
+    # no more than the leakage factor's (a leakage is among the candidates)
+    judged = monitor.alarm_drop_pt()
+    assert 0.0 < judged <= monitor.drop_pt() + 1e-9
+    want = m.DIAG_ERROR if judged > 5 else m.DIAG_WARN if judged > 2 else m.DIAG_OK
     assert monitor.level() == want
     msg, named = f.messages[-2:]
     assert msg.topic == HEALTH and msg.msg["layout"]["dim"][0]["label"] == ",".join(HEALTH_FIELDS)
@@ -276,7 +280,8 @@ def test_the_level_judges_the_named_faults_loss(monitor):
 
 def test_a_tentative_naming_is_judged_by_the_smaller_loss(monitor):
     """Closed form: the level's loss is the named fault's at its fitted size; when the naming is tentative (its rival
-    not yet excluded) the smaller of the two kinds' losses, the one the windows support whichever is the fault."""
+    not yet excluded) the smaller of the two kinds' losses, the one the windows support whichever is the fault; at one
+    operating point the smallest over the candidate kinds; when no kind fits, the leakage factor's."""
     from gerotor_twin.twin.diagnosis import Diagnosis
 
     class Losses:                       # SteadySignatures.reference_loss with θ read as the loss itself
@@ -291,3 +296,10 @@ def test_a_tentative_naming_is_judged_by_the_smaller_loss(monitor):
     monitor.diagnosis = Diagnosis("air_ingress", 0.8, {}, {}, theta, 1.0, 8, rival="pressure_offset",
                                   separation=1.5, tentative=True)
     assert monitor.alarm_drop_pt() == pytest.approx(3.0)
+    # one operating point: every candidate kind (in the log-likelihoods) is a rival; nothing fits: the leakage factor's
+    theta = {"tip_wear": 0.09, "lateral_wear": 0.08, "air_ingress": 0.05, "flowmeter_drift": 0.04, "pressure_offset": 0.01}
+    ll = {"healthy": -50.0, "unknown": -20.0, **{k: -10.0 for k in theta if k != "pressure_offset"}}
+    monitor.diagnosis = Diagnosis("unknown", 1.0, ll, {}, theta, 1.0, 8, points=1)
+    assert monitor.alarm_drop_pt() == pytest.approx(4.0)        # the offset is no candidate here (not in ll)
+    monitor.diagnosis = Diagnosis("unknown", 1.0, ll, {}, theta, 99.0, 8, points=3)
+    assert monitor.alarm_drop_pt() == monitor.drop_pt()

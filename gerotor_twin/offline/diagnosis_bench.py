@@ -331,8 +331,8 @@ def run_bags(out: Path, cases, ramp_s: float, cfg, config_path: str | None = Non
     for i, (kind, to, seed) in enumerate(cases, 1):
         r = run_case(cfg, kind, to, seed, out, ramp_s, config_path, profile_file, health)
         results.append(r)
-        alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s {fault_text(a['fault'], None, a.get('rival'))}"
-                           for a in r["alarms"])
+        alarms = ", ".join(f"{a['level']} {a['start_s']:.1f}-{a['end_s']:.1f} s "
+                           f"{fault_text(a['fault'], None, a.get('rival'))}" for a in r["alarms"])
         cross = "-" if r["crossing_s"] is None else f"{r['crossing_s']:.1f} s"
         sev = "-" if to is None else f"{to:.4g}"
         print(f"[{i}/{len(cases)} {time.time() - t0:4.0f} s] {kind:20s} {sev:8s} seed {seed}: last {r['named']} "

@@ -111,6 +111,6 @@ def fault_timeline(ctx: ReportContext) -> Table | None:
     return Table("tab-fault-timeline", HEALTH, cols, rows, f"{ctx.stem}_fault_timeline.csv",
                  "Each interval the monitor spent in WARN or ERROR (times as in the plots) with the fault the "
                  "classifier named at its last update (healthy, a fault kind, or unknown: no kind explains the "
-                 "residuals, or one operating point only; 'a or b': a tentative naming, a not yet told apart from b at the "
-                 "operating points seen) and its probability (for unknown: that of a fault); '-': the "
+                 "residuals, or one operating point only; 'a or b': a tentative naming, a not yet told apart "
+                 "from b at the operating points seen) and its probability (for unknown: that of a fault); '-': the "
                  "log carries no diagnosis.", f"Fault timeline ({twin.label})")

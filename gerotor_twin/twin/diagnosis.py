@@ -187,6 +187,8 @@ class Diagnosis:
     tentative : bool
         The separation is below 2·``separable_z``²: the windows cannot yet tell the named kind from ``rival``
         (the name is the more probable of the two, by the probability given).
+    points : int
+        Operating points among the windows (:func:`operating_points`) [-].
     """
     kind: str
     confidence: float
@@ -199,6 +201,7 @@ class Diagnosis:
     rival: str = ""
     separation: float = math.nan
     tentative: bool = False
+    points: int = 0
 
     @property
     def code(self) -> int:
@@ -420,8 +423,9 @@ def _closest_rival(kind: str, columns: dict, ll: dict, e, sd, t, s: DiagnosisSet
     return min(seps.items(), key=lambda kv: kv[1], default=("", math.nan))
 
 
-def _decide(ll: dict, chi2: dict, recs, s: DiagnosisSettings) -> tuple[str, dict, str]:
-    """The named kind (module doc, "Decision"), the candidates' probabilities and the most likely kind."""
+def _decide(ll: dict, chi2: dict, recs, points: int, s: DiagnosisSettings) -> tuple[str, dict, str]:
+    """The named kind (module doc, "Decision") on ``recs`` at ``points`` operating points, the candidates'
+    probabilities and the most likely kind."""
     names = list(ll)
     v = np.array([ll[k] for k in names])
     p = np.exp(v - v.max())
@@ -432,7 +436,7 @@ def _decide(ll: dict, chi2: dict, recs, s: DiagnosisSettings) -> tuple[str, dict
     kind = best if prob[best] >= prob["unknown"] else "unknown"
     if chi2[best] > n + s.chi2_z * math.sqrt(2.0 * n):
         kind = "unknown"
-    if kind in FLOW_KINDS and operating_points(recs, s.point_speed_tol, s.point_pressure_pa) < 2:
+    if kind in FLOW_KINDS and points < 2:
         kind = "unknown"                     # one operating point: every kind fits it, only the priors differ
     return kind, prob, best
 
@@ -483,14 +487,15 @@ def classify(records, signatures, settings: DiagnosisSettings | None = None, rel
                                                                                s.suction_prior_pa, s.trend)
     ll["suction_restriction"] += ll["healthy"]       # the flow as predicted: the twin runs on the measured suction
     chi2["suction_restriction"] = chi2["healthy"]
-    kind, prob, best = _decide(ll, chi2, recs, s)
+    points = operating_points(recs, s.point_speed_tol, s.point_pressure_pa)
+    kind, prob, best = _decide(ll, chi2, recs, points, s)
     rival, sep = _closest_rival(kind, columns, ll, e, sd, t, s, rate_sd) if kind in FLOW_KINDS else ("", math.nan)
     tentative = sep < 2.0 * s.separable_z ** 2            # the windows cannot yet tell it from ``rival``
     dropout = missing_fraction(recs)
     if kind == "healthy" and dropout > s.dropout_min:
         kind = "speed_dropout"
     conf = {"speed_dropout": prob["healthy"], "unknown": 1.0 - prob["healthy"]}.get(kind, prob.get(kind))
-    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout, rival, sep, tentative)
+    return Diagnosis(kind, conf, ll, prob, theta, chi2[best], len(recs), dropout, rival, sep, tentative, points)
 
 
 #: the kinds whose signature is a finite difference of the steady model: the setting that holds the step

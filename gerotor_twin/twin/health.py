@@ -38,9 +38,10 @@ stamped, on ``twin/health_update``)
     windows (``fault``: its index in :data:`~.diagnosis.KINDS`, −1 not classified) with its probability
     (``fault_confidence``); for a fault of the flow, the kind the windows separate least from it (``fault_rival``,
     its index, −1 none), how well (``fault_separation``, the expected log-likelihood ratio) and whether that is
-    below the classifier's bound (``fault_tentative`` 1: the naming is tentative).  Each window is recorded (:attr:`HealthMonitor.windows`: mean speed, pressures,
-    oil temperature, measured and predicted flow, noise, shaft-speed samples received and expected) and
-    classified against the twin's steady sensitivities at its operating point; not with ``adapt``.
+    below the classifier's bound (``fault_tentative`` 1: the naming is tentative).  Each window is recorded
+    (:attr:`HealthMonitor.windows`: mean speed, pressures, oil temperature, measured and predicted flow, noise,
+    shaft-speed samples received and expected) and classified against the twin's steady sensitivities at its
+    operating point; not with ``adapt``.
 Status (``/diagnostics`` ``gerotor_twin: health``)
     STALE until ``min_updates`` updates (no measured flow, or never steady); ERROR when
     the reference efficiency fell more than ``error_pt`` points below the calibrated
@@ -65,8 +66,8 @@ from gerotor_twin.errors import InputError, check_int, check_ranges
 from gerotor_twin.io import messages as m
 from gerotor_twin.twin import leakage_filter as lf
 from gerotor_twin.twin.diagnosis import FLOW_KINDS, KIND_CODES, KINDS, Diagnosis, DiagnosisSettings, SpeedCounter, SteadySignatures, WindowRecord, classify
-from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.meter_reading import MeterReading
+from gerotor_twin.twin.outputs import FLOW_SUMMARY, HEALTH as HEALTH_TOPIC, HEALTH_UPDATE, OutputMessage, named_values
 from gerotor_twin.twin.residual import FlowSamples
 
 __all__ = ["HealthSettings", "HealthMonitor", "HEALTH_TOPIC", "HEALTH_FIELDS", "HEALTH_STATUS", "calibration_eta_rmse",
@@ -476,19 +477,26 @@ class HealthMonitor:
 
         Once the classifier names a fault of the flow (:data:`~.diagnosis.FLOW_KINDS`, seen at two operating
         points or more), that fault's loss there at its fitted size (the latest window's θ,
-        :meth:`~.diagnosis.SteadySignatures.reference_loss`); otherwise the leakage factor's (:meth:`drop_pt`).
+        :meth:`~.diagnosis.SteadySignatures.reference_loss`); while the windows are at one operating point, where
+        every candidate kind fits the residual and carries it to the reference point by its own law, the smallest
+        of their losses; otherwise (nothing classified, no kind fits, healthy) the leakage factor's (:meth:`drop_pt`).
         The leakage factor reads every loss as leakage, whose share grows with the delivery pressure, so it
         extrapolates a meter gain, air or a pressure offset seen at a low pressure to a larger loss at the
         reference point and one seen at a high pressure to a smaller one: the level would change with the
         operating point under a constant fault.  A tentative naming (the windows cannot yet tell the named kind
         from its rival, :attr:`~.diagnosis.Diagnosis.tentative`) is judged by the smaller of the two kinds' losses
-        at their fitted sizes: the loss the windows support whichever of them is the fault."""
+        at their fitted sizes: the loss the windows support whichever of them is the fault (at one operating point
+        every candidate kind is such a rival)."""
         d, sig = self.diagnosis, self._signature_of
         if d is not None and sig is not None and d.kind in FLOW_KINDS and d.kind in d.parameter:
             loss = sig.reference_loss(d.kind, d.parameter[d.kind])
             if d.tentative and d.rival in d.parameter:
                 loss = min(loss, sig.reference_loss(d.rival, d.parameter[d.rival]))
             return 100.0 * loss
+        if d is not None and sig is not None and d.kind == "unknown" and d.points == 1:
+            losses = [sig.reference_loss(k, d.parameter[k]) for k in FLOW_KINDS if k in d.log_likelihood]
+            if losses:              # one operating point: every candidate kind is a rival
+                return 100.0 * min(losses)
         return self.drop_pt()
 
     def level(self) -> int:
