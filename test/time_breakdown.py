@@ -22,10 +22,11 @@ import sys
 import time
 from pathlib import Path
 
-#: (module, attribute) of the calls timed: the product's work and the waits on other processes
+#: (module, attribute) of the calls timed: the product's work and the waits on other processes (not
+#: ``time.sleep``: background threads sleep too, and their sleeps would count as the test's)
 TIMED = (("gerotor_twin.bench_emulator.emulator", "synthesize"), ("gerotor_twin.offline.run_bag", "run_bag"),
          ("gerotor_twin.model.steady", "run_steady"), ("gerotor_twin.model.pump", "PumpModel.advance"),
-         ("subprocess", "Popen.communicate"), ("subprocess", "Popen.wait"), ("time", "sleep"))
+         ("subprocess", "Popen.communicate"), ("subprocess", "Popen.wait"))
 
 _calls: dict = collections.defaultdict(float)
 _compiles: list = []
@@ -126,4 +127,7 @@ def summary(directory: Path) -> str:
 
 
 if __name__ == "__main__":
-    print(summary(Path(sys.argv[1]) if len(sys.argv) > 1 else _out_dir()))
+    where = Path(sys.argv[1]) if len(sys.argv) > 1 else _out_dir()
+    if not any(where.glob("*.json")):
+        sys.exit(f"error: no worker files in {where} (run the suite with `-p time_breakdown` first)")
+    print(summary(where))
