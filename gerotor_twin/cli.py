@@ -489,10 +489,12 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
                         "models: wall time per revolution of the four outer-gear models at 1000/3000 rpm; "
                         "parts: where an output step's time goes (each part of the stepper timed alone)")
     b.add_argument("--rpm", default=None, help="shaft speed(s) [rpm], comma-separated (realtime: default "
-                                               "1000,2000,3000; accuracy: default 3000)")
+                                               "1000,2000,3000; accuracy: default 3000; maps: the maps' speeds, "
+                                               "default 1000,1500,2000,2500,3000)")
     b.add_argument("--bar", default=None, help="delivery pressure(s) [bar gauge], comma-separated (default 27.5; "
                                                "realtime uses the first; node: the first, default the pump's "
-                                               "range.max_delivery_bar)")
+                                               "range.max_delivery_bar; maps: the maps' pressures, default "
+                                               "5,12.5,20)")
     b.add_argument("--models", help="comma-separated outer-gear models "
                                      "(default fixed,mobility for realtime; all four for models)")
     b.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per run")

@@ -241,6 +241,8 @@ class PumpConfig:
     bypass_area_m2: float = 0.0
     #: chambers' unfilled fraction at 1000 rpm and atmospheric suction, k_f [-] (:mod:`gerotor_twin.model.volumetric`)
     filling_loss_at_1000rpm: float = 0.0
+    #: the inlet's pressure drop the chambers absorb before they fill short, Δp_m [Pa] (:mod:`gerotor_twin.model.volumetric`)
+    filling_margin_pa: float = 0.0
 
     def with_fluid_model(self, model: str) -> "PumpConfig":
         """The same pump with another fluid model (``"paper"`` or ``"mixture"``)."""
@@ -270,7 +272,8 @@ class PumpConfig:
             "orifice": _asdict(self.orifice),
             "leakage": {"tip_dh": self.tip_dh},
             "volumetric": {"displacement_factor": self.displacement_factor, "bypass_area_m2": self.bypass_area_m2,
-                           "filling_loss_at_1000rpm": self.filling_loss_at_1000rpm},
+                           "filling_loss_at_1000rpm": self.filling_loss_at_1000rpm,
+                           "filling_margin_pa": self.filling_margin_pa},
             "boundary": _asdict(self.boundary),
             "range": self.range.to_dict(),
             "numerics": _asdict(self.numerics),
@@ -380,11 +383,14 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
     orifice = Orifice(**{k: (str(osec[k]) if k == "law" else _num(osec, "orifice", k)) for k in osec})
     ls = _section(raw, "leakage", {"tip_dh"}, False)
     tip_dh = check_range("leakage.tip_dh", _num(ls, "leakage", "tip_dh", 0.347), 0.0, 10.0, lo_open=True)
-    vs = _section(raw, "volumetric", {"displacement_factor", "bypass_area_m2", "filling_loss_at_1000rpm"}, False)
+    vs = _section(raw, "volumetric", {"displacement_factor", "bypass_area_m2", "filling_loss_at_1000rpm",
+                                      "filling_margin_pa"}, False)
     k_d = check_range("volumetric.displacement_factor", _num(vs, "volumetric", "displacement_factor", 1.0), 0.5, 1.1)
     a_b = check_range("volumetric.bypass_area_m2", _num(vs, "volumetric", "bypass_area_m2", 0.0), 0.0, 1e-4, unit="m²")
     k_f = check_range("volumetric.filling_loss_at_1000rpm", _num(vs, "volumetric", "filling_loss_at_1000rpm", 0.0),
                       0.0, 0.2)
+    dp_m = check_range("volumetric.filling_margin_pa", _num(vs, "volumetric", "filling_margin_pa", 0.0), 0.0, 1e5,
+                       unit="Pa")
     bk = {"mode", "suction_pressure_pa", "delivery_volume_m3", "restriction_area_m2"}
     bs = _section(raw, "boundary", bk, False)
     boundary = Boundary(mode=bs.get("mode", "imposed"),
@@ -401,7 +407,7 @@ def parse_config(raw: dict, source: str = "<memory>") -> PumpConfig:
                       reference_temperature_k=t_ref, fluid_model=parse_fluid_model(raw.get("fluid_model", "mixture")),
                       air=parse_air(_section(raw, "mixture", {f.name for f in fields(AirContent)}, False)),
                       micro_motion=_micro_motion(raw), displacement_factor=k_d, bypass_area_m2=a_b,
-                      filling_loss_at_1000rpm=k_f,
+                      filling_loss_at_1000rpm=k_f, filling_margin_pa=dp_m,
                       calibration=_calibration_block(raw.get("calibration")),
                       notes=tuple(notes + far_from_default("numerics", ns, num)
                                   + _bridge_notes(gears, ports["suction"], ports["delivery"])))

@@ -14,6 +14,7 @@ from scipy.stats import t as student_t
 
 from gerotor_twin.cli import main
 from gerotor_twin.config import load_config
+from gerotor_twin.errors import InputError
 from gerotor_twin.calibration import selection as S
 from gerotor_twin.calibration.command import calibrate_records
 from gerotor_twin.calibration.map_synth import synthetic_map
@@ -124,6 +125,9 @@ def test_command_says_when_the_empirical_law_wins(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "held-out RMSE" in text and "fit RMSE" in text and "empirical 1 − η = a + b·Δp/n" in text
     assert "the empirical law predicts the held-out points better than the twin" in text
+    assert "its held-out |η error| by speed (mean [pt]): 1000 rpm " in text       # each fold's speed, in order
+    assert text.index("1000 rpm ", text.index("by speed")) < text.index("2000 rpm ", text.index("by speed")) \
+        < text.index("3000 rpm ", text.index("by speed"))
     assert load_config(out).calibration["selection"]["baseline_better"] is True
     html = page.read_text()
     assert "held-out RMSE [pt]" in html and "The empirical law predicts the held-out points better" in html
@@ -138,6 +142,19 @@ def test_bench_map_subtracts_its_loss_closed_form():
     plain = synthetic_map(_raw(case), [(got.omega, got.p_delivery_pa, got.oil_temperature_c)])[0]
     qth = load_config().gears.displacement_closed_form() * 25.0
     assert plain.flow_m3s - got.flow_m3s == pytest.approx(0.0125 * qth, rel=1e-12)
+
+
+def test_bench_maps_grid_checked_in_one_line():
+    """Behaviour: ``bench maps --rpm/--bar`` give the maps' grid; one speed (leave one speed out needs two), a
+    speed above the pump's range or a pressure ≤ 0 is an InputError naming the option."""
+    from gerotor_twin.calibration.map_bench import BARS, SPEEDS_RPM, grid
+    assert grid(None, None) == {"speeds_rpm": SPEEDS_RPM, "bars": BARS}
+    assert grid("1000,2000", "5") == {"speeds_rpm": (1000.0, 2000.0), "bars": (5.0,)}
+    for rpm, bar, option in (("1000", None, "--rpm"), ("1000,1000", None, "--rpm"), ("1000,9000", None, "--rpm"),
+                             ("1000,x", None, "--rpm"), (None, "0,5", "--bar"), (None, "5,99", "--bar")):
+        with pytest.raises(InputError) as err:
+            grid(rpm, bar)
+        assert str(err.value).startswith(f"{option} = "), (rpm, bar, str(err.value))
 
 
 def test_solve_holds_a_bounded_coordinate_unless_the_data_pull_it_in():

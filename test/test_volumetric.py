@@ -1,12 +1,15 @@
 """The edge losses (``volumetric``: effective displacement k_D, filling loss k_f, bypass): where they act, and
 that a fit recovers them.
 
-Tiers: closed form (the deficit (1 − k_D)·D·ω/2π and the filling loss k_f (ω/ω₁)² (p_atm/p_s)·D·ω/2π in the
+Tiers: closed form (the deficit (1 − k_D)·D·ω/2π and the filling loss k_f (ω/ω₁)² (p_atm/p_s)·D·ω/2π, with its
+margin max(0, k_f p_atm (ω/ω₁)² − Δp_m)/p_s·D·ω/2π, in the
 steady state and the twin's revolution summary); bad input (the config's range); closed form on a synthetic
 truth (a map made by the twin at known clearances and a known displacement deficit or filling loss is recovered
 within its 95 % interval, and the tip/lateral fit alone cannot represent it).
 """
+import io
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -14,8 +17,9 @@ import pytest
 
 from gerotor_twin.config import load_config, parse_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.model.volumetric import EdgeLosses, bypass_flow, displacement_deficit, filling_deficit
-from gerotor_twin.calibration.command import calibrate_records
+from gerotor_twin.model.volumetric import (EdgeLosses, bypass_flow, displacement_deficit, filling_deficit,
+                                          filling_onset_rad_s)
+from gerotor_twin.calibration.command import calibrate_records, print_summary
 from gerotor_twin.calibration.map_synth import synthetic_map
 from gerotor_twin.twin.revolution import Revolution
 
@@ -58,6 +62,24 @@ def test_filling_deficit():
     assert edge.flow(w, 20e5, 101325.0) == pytest.approx(0.04 * q + 0.04 * q)
 
 
+def test_filling_deficit_with_margin():
+    """Closed form: k_f = 0.01 makes an inlet drop of 0.01 × 101 325 Pa × (ω/ω₁)²; a margin Δp_m = 2026.5 Pa
+    absorbs it up to ω/ω₁ = √2 (the onset, 1414 rpm: none lost at 1400 rpm), and at 2000 rpm leaves
+    (4052.6 − 2026.5)/101 325 = 2 % of the chambers unfilled, half the 4 % without it; the config's margin reaches
+    the twin's edge losses."""
+    w = 2000 * math.pi / 30
+    q = 20e-6 * w / (2 * math.pi)
+    margin = 0.02 * 101325.0
+    assert filling_deficit(w, 101325.0, 20e-6, 0.01, margin) == pytest.approx(0.02 * q)
+    assert filling_deficit(1400 * math.pi / 30, 101325.0, 20e-6, 0.01, margin) == 0.0
+    assert filling_deficit(1420 * math.pi / 30, 101325.0, 20e-6, 0.01, margin) > 0.0
+    assert filling_onset_rad_s(0.01, margin) * 30 / math.pi == pytest.approx(1000 * math.sqrt(2))
+    raw = _raw(k_f=0.01)
+    raw["volumetric"]["filling_margin_pa"] = margin
+    edge = EdgeLosses.of(parse_config(raw), 20e-6)
+    assert edge.flow(w, 20e5, 101325.0) == pytest.approx(0.02 * q)
+
+
 def test_revolution_summary_closed_form():
     """Closed form: over one revolution of T = 0.04 s the model delivering 9e-6 m³ of a 10 cm³ pump, 1e-6 m³
     lost at the edge: mean 2e-4 m³/s, η_v 0.8, leakage 5e-5 m³/s."""
@@ -68,8 +90,8 @@ def test_revolution_summary_closed_form():
 
 
 def test_config_range():
-    """Bad input: a displacement factor outside [0.5, 1.1] or a negative filling loss is refused naming the field;
-    absent means 1 and 0."""
+    """Bad input: a displacement factor outside [0.5, 1.1], a negative filling loss or margin is refused naming the
+    field; absent means 1, 0 and 0."""
     raw = _raw()
     raw["volumetric"]["displacement_factor"] = 1.3
     with pytest.raises(InputError, match="volumetric.displacement_factor"):
@@ -78,9 +100,13 @@ def test_config_range():
     raw["volumetric"]["filling_loss_at_1000rpm"] = -0.01
     with pytest.raises(InputError, match="volumetric.filling_loss_at_1000rpm"):
         parse_config(raw)
+    raw["volumetric"]["filling_loss_at_1000rpm"] = 0.0
+    raw["volumetric"]["filling_margin_pa"] = -1.0
+    with pytest.raises(InputError, match="volumetric.filling_margin_pa"):
+        parse_config(raw)
     del raw["volumetric"]
     cfg = parse_config(raw)
-    assert cfg.displacement_factor == 1.0 and cfg.filling_loss_at_1000rpm == 0.0
+    assert cfg.displacement_factor == 1.0 and cfg.filling_loss_at_1000rpm == 0.0 and cfg.filling_margin_pa == 0.0
 
 
 @pytest.fixture(scope="module")
@@ -136,6 +162,38 @@ def test_map_fit_recovers_the_filling_loss():
     without = calibrate_records(truth, ["filling.csv"], params=("tip", "lateral", "displacement"), holdout=0,
                                 jobs=1)["fit"]
     assert without["eta_error"]["max_abs"] > 3e-3
+
+
+#: a filling loss with an onset: k_f = 0.008 and a margin of the inlet drop at 1500 rpm, 0.008 × 101 325 Pa × 1.5²
+#: (none lost below 1500 rpm, 2.8 % at 2400 rpm), clearances × 1.2, four speeds
+K_F_ONSET, MARGIN_PA = 0.008, 0.008 * 101325.0 * 1.5 ** 2
+ONSET_POINTS = [(rpm * math.pi / 30, 101325.0 + bar * 1e5, 45.0) for rpm in (1000, 1800, 2400, 3000) for bar in (4, 20)]
+
+
+def test_map_fit_recovers_the_filling_onset():
+    """Closed form (synthetic truth, the twin's own model): a map whose chambers fill fully up to 1500 rpm and
+    short beyond (k_f with its margin Δp_m) is fitted by the gaps, the filling loss and its margin with each
+    inside its 95 % interval, and the summary names the onset (1500 rpm within 1 %).  The margin acts only
+    through the loss: at the prior (k_f = 0) it changes nothing, so the analysis takes the Jacobian with the loss
+    one step in; the gaps with the loss alone fit the map worse than 0.1 pt."""
+    raw = _raw(CLEARANCE_FACTOR, 1.0, K_F_ONSET)
+    raw["volumetric"]["filling_margin_pa"] = MARGIN_PA
+    truth = synthetic_map(raw, ONSET_POINTS, source="onset.csv")
+    res = calibrate_records(truth, ["onset.csv"], params=("tip", "lateral", "filling", "filling_margin"),
+                            holdout=0, jobs=1)
+    by = {p["name"]: p for p in res["fit"]["parameters"]}
+    assert by["filling_margin"]["identifiable"] and by["filling"]["identifiable"]
+    assert by["filling_margin"]["ci95"][0] <= MARGIN_PA <= by["filling_margin"]["ci95"][1]
+    assert by["filling"]["ci95"][0] <= K_F_ONSET <= by["filling"]["ci95"][1]
+    gaps = next(c for c in res["fit"]["combinations"] if abs(c["coefficients"]["lateral"]) > 0)
+    assert gaps["factor_ci95"][0] <= CLEARANCE_FACTOR <= gaps["factor_ci95"][1]
+    out = io.StringIO()
+    print_summary(res, out)
+    onset = re.search(r"filling onset: chambers full up to (\d+) rpm", out.getvalue())
+    assert onset and float(onset.group(1)) == pytest.approx(1500, rel=0.01), out.getvalue()
+    without = calibrate_records(truth, ["onset.csv"], params=("tip", "lateral", "filling"), holdout=0,
+                                jobs=1)["fit"]
+    assert without["eta_error"]["max_abs"] > 1e-3
 
 
 #: a bypass of 0.5 mm² and a 3 % displacement deficit at the nominal clearances, at two oil temperatures

@@ -21,7 +21,7 @@ import yaml
 from .. import __version__
 from ..config import load_config, parse_config
 from ..errors import InputError, check_range
-from ..units import m3s_to_lpm
+from ..units import m3s_to_lpm, rad_s_to_rpm
 from . import fit as C
 from ..hydraulics.meter import FLOW_METERS
 from .fit_model import DISPLAY_UNITS, PARAMETERS, apply, parse_params
@@ -32,7 +32,7 @@ from .pump_map import MapLimits, PumpMapError, read_map
 
 #: what ``--map`` may fit by default: the gaps, their opening with pressure, the effective displacement, the
 #: bypass path and the filling loss growing with speed
-MAP_PARAMS = ("tip", "lateral", "lateral_opening", "displacement", "bypass", "filling")
+MAP_PARAMS = ("tip", "lateral", "lateral_opening", "displacement", "bypass", "filling", "filling_margin")
 #: the candidate sets ``--map`` compares by default (the prior besides): each loss alone and with the gaps (the
 #: lateral gap's opening with pressure alone as well: over a narrow pressure range its Δp² is confused with the
 #: gaps' Δp, and the identifiability analysis would keep it at its prior beside them); the filling loss with the
@@ -40,7 +40,8 @@ MAP_PARAMS = ("tip", "lateral", "lateral_opening", "displacement", "bypass", "fi
 MAP_CANDIDATES = (("tip", "lateral"), ("displacement",), ("tip", "lateral", "displacement"),
                   ("tip", "lateral", "bypass"), ("tip", "lateral", "displacement", "bypass"),
                   ("lateral_opening",), ("lateral_opening", "displacement"), ("tip", "lateral", "lateral_opening"),
-                  ("tip", "lateral", "filling"), ("tip", "lateral", "displacement", "filling"))
+                  ("tip", "lateral", "filling"), ("tip", "lateral", "displacement", "filling"),
+                  ("tip", "lateral", "filling", "filling_margin"))
 
 #: the candidate sets ``--bench`` compares by default (the prior besides): the gaps, the effective displacement
 #: alone and with the gaps (a pump that differs from the twin in form: free air, another port law, tolerances of
@@ -267,6 +268,8 @@ def _select(ev, records, raw, plan: FitPlan, displacement, opts, say) -> tuple[d
     base = S.baseline(records, fold_index, displacement, raw["boundary"]["suction_pressure_pa"])
     interval = _interval(ev, pick, fr, records, displacement)
     return {"cv": plan.cv, "folds": [[records[i].label() for i in f] for f in fold_index],
+            "fold_rpm": [float(np.mean([records[i].rpm for i in f])) for f in fold_index],
+            "chosen_fold_mean_abs": [float(np.mean(np.abs(pick.cv_errors[f]))) for f in fold_index],
             "plateau_labels": [r.label() for r in records],
             "candidates": [c.summary() for c, _ in runs], "chosen": list(pick.names), "reason": why,
             "eta_noise": noise, "cv_rmse": pick.cv_rmse, "cv_rmse_se": pick.cv_rmse_se,
@@ -362,6 +365,7 @@ def print_summary(result: dict, out=None) -> None:
         print(f"  kept at the prior (the data do not see them): {', '.join(f['insensitive'])}", file=out)
     if f.get("fixed"):
         print(f"  kept at the prior (the data confuse them with the others): {', '.join(f['fixed'])}", file=out)
+    _print_onset(f["parameters"], out)
     for c in (c for c in f["combinations"] if not c.get("linear")):
         print(f"  identifiable: {c['label']} → factor {c['factor']:.4f} (parameter 95 % CI {c['factor_ci95'][0]:.4f}"
               f"..{c['factor_ci95'][1]:.4f})", file=out)
@@ -383,6 +387,16 @@ def print_summary(result: dict, out=None) -> None:
         print(result["verdict"]["message"], file=out)
 
 
+def _print_onset(parameters: list[dict], out) -> None:
+    """The filling onset speed, when the filling margin was fitted beside a filling loss."""
+    from ..model.volumetric import filling_onset_rad_s
+    by = {p["name"]: p for p in parameters}
+    if "filling_margin" in by and "filling" in by and by["filling_margin"]["value"] > 0 and by["filling"]["value"] > 0:
+        onset = filling_onset_rad_s(by["filling"]["value"], by["filling_margin"]["value"])
+        print(f"  filling onset: chambers full up to {rad_s_to_rpm(onset):.0f} rpm at atmospheric suction "
+              "(√(filling_margin / (filling · p_atm)) × 1000 rpm)", file=out)
+
+
 def print_selection(sel: dict, out=None) -> None:
     """The candidate sets' fit and held-out errors side by side, the choice, the band and the baseline."""
     out = out or sys.stdout
@@ -399,6 +413,11 @@ def print_selection(sel: dict, out=None) -> None:
             print(f"    ({'+'.join(c['params'])}: {', '.join(c['held_at_prior'])} kept at the prior by the "
                   f"identifiability analysis, --rcond {c.get('rcond', 0.1):g})", file=out)
     print(f"  chosen: {sel['reason']}", file=out)
+    if sel["cv"] == "speed" and "fold_rpm" in sel:
+        by_speed = sorted(zip(sel["fold_rpm"], sel["chosen_fold_mean_abs"]))
+        print("  its held-out |η error| by speed (mean [pt]): "
+              + ", ".join(f"{rpm:.0f} rpm {_pt(e)}" for rpm, e in by_speed)
+              + " (the lowest and highest speeds held out are predicted beyond the speeds fitted)", file=out)
     pi = sel.get("prediction_interval")
     if pi:
         print(f"  prediction interval of η_v (95 %): ± {_pt(pi['twin_half_width_eta'])} pt for the twin (model-form "

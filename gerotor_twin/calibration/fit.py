@@ -170,9 +170,13 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     if p == 0:          # the prior itself: nothing to fit
         return FitResult((), np.zeros(0), np.zeros((0, 0)), ident.analyse(np.zeros((len(records), 0)), (), rcond),
                          (f_prior - q) / sig, f_prior, f_prior, math.nan, len(records), 0)
-    analysis = structure if structure is not None else ident.analyse(
-        _jacobian(ev, names, np.zeros(p), records, f_prior, sig), names, rcond,
-        linear=[PARAMETERS[n].step > 0 for n in names])
+    if structure is not None:
+        analysis = structure
+    else:
+        x_a = analysis_point(names, ev.raw_prior)
+        f_a = f_prior if not x_a.any() else ev.flows(names, [x_a], records)[0]
+        analysis = ident.analyse(_jacobian(ev, names, x_a, records, f_a, sig), names, rcond,
+                                 linear=[PARAMETERS[n].step > 0 for n in names])
     basis = analysis["basis"]
     say(f"  identifiable directions: {len(analysis['kept'])} of {p}")
     cache = {}
@@ -204,6 +208,15 @@ def fit(ev: Evaluator, names, records: list[PlateauRecord], *, rcond: float = 0.
     jb = jac(b) if r else np.zeros((len(records), 0))
     cov_b, s2, dof = ident.covariance(jb, res) if r else (np.zeros((0, 0)), math.nan, len(records))
     return FitResult(tuple(names), x, basis @ cov_b @ basis.T, analysis, res, model(b), f_prior, s2, dof, nfev)
+
+
+def analysis_point(names, raw_prior: dict) -> np.ndarray:
+    """Where the identifiability analysis takes the Jacobian: the prior (x = 0), but a gate (the parameter another
+    of ``names`` acts through, :attr:`.fit_model.FitParameter.gate`) whose prior is zero one step in (x = 1), so
+    that the parameter acting through it is seen (the filling margin has no effect without a filling loss)."""
+    priors = dict(zip(names, prior_values(raw_prior, names)))
+    gates = {PARAMETERS[n].gate for n in names} & set(names)
+    return np.array([1.0 if n in gates and priors[n] == 0.0 and PARAMETERS[n].step > 0 else 0.0 for n in names])
 
 
 def _least_squares(fun, jac, b0, lo, hi):

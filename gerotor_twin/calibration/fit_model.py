@@ -26,7 +26,15 @@ bypass     volumetric.bypass_area_m2     a turbulent delivery → suction path, 
 filling    volumetric.filling_loss_      chambers filling short at speed: a deficit
            at_1000rpm                    k_f·(n/1000 rpm)²·(p_atm/p_s)·D·n (fitted
                                          linearly, step 0.001)
+filling_   volumetric.filling_margin_pa  the inlet's pressure drop the chambers absorb
+margin                                   before they fill short: full chambers up to an
+                                         onset speed (fitted linearly, step 100 Pa;
+                                         acts through ``filling``)
 =========  ============================  ===========================================
+
+A parameter that acts only through another (``gate``: the filling margin through the filling loss) has no
+effect while that one is at zero; where the gate's prior is zero the identifiability analysis looks at the
+Jacobian with the gate one step in (:func:`.fit.analysis_point`).
 
 Each starts at its prior, the value of the pump config given (``displacement``: 1, the ideal
 profiles, ``lateral_opening`` and ``filling``: 0, rigid plates and full chambers, unless the config says otherwise), and is fitted only when the identifiability
@@ -60,6 +68,7 @@ class FitParameter:
     unit: str
     description: str
     step: float = 0.0            #: 0: fitted as ln(value / prior); > 0: as (value − prior) / step [unit]
+    gate: str = ""               #: the parameter it acts through ("": none): no effect while that one is 0
 
     def value(self, prior: float, x: float) -> float:
         """The value at fitted coordinate ``x`` (unclipped) [unit]."""
@@ -87,11 +96,14 @@ PARAMETERS = {p.name: p for p in (
                  "effective area of a turbulent delivery → suction path", step=1e-6),
     FitParameter("filling", "volumetric", "filling_loss_at_1000rpm", 0.0, 0.2, "-",
                  "chambers' unfilled fraction at 1000 rpm and atmospheric suction (grows as speed²)", step=1e-3),
+    FitParameter("filling_margin", "volumetric", "filling_margin_pa", 0.0, 1e5, "Pa",
+                 "inlet pressure drop the chambers absorb before they fill short (an onset speed)", step=100.0,
+                 gate="filling"),
 )}
 
 
 #: unit of a fitted parameter → (scale, unit) it is shown in (the command's summary, the HTML report)
-DISPLAY_UNITS = {"m": (1e6, "µm"), "m²": (1e6, "mm²"), "m/Pa": (1e11, "µm/bar")}
+DISPLAY_UNITS = {"m": (1e6, "µm"), "m²": (1e6, "mm²"), "m/Pa": (1e11, "µm/bar"), "Pa": (1e-2, "mbar")}
 
 
 def display_value(v: float, unit: str) -> str:
@@ -205,7 +217,8 @@ def without_edge_losses(raw: dict) -> dict:
     losses are applied after the chamber model (:mod:`gerotor_twin.model.volumetric`), so every ``volumetric``
     section shares one run of it (:func:`with_edge_losses`)."""
     out = dict(raw)
-    out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0, "filling_loss_at_1000rpm": 0.0}
+    out["volumetric"] = {"displacement_factor": 1.0, "bypass_area_m2": 0.0, "filling_loss_at_1000rpm": 0.0,
+                         "filling_margin_pa": 0.0}
     return out
 
 
@@ -225,5 +238,5 @@ def with_edge_losses(run: dict, raw: dict, omega: float) -> float:
     vs = raw.get("volumetric", {})
     edge = EdgeLosses(run["displacement_m3"], float(vs.get("displacement_factor", 1.0)),
                       float(vs.get("bypass_area_m2", 0.0)), run["density_kg_m3"],
-                      float(vs.get("filling_loss_at_1000rpm", 0.0)))
+                      float(vs.get("filling_loss_at_1000rpm", 0.0)), float(vs.get("filling_margin_pa", 0.0)))
     return run["edge_free_m3s"] - edge.flow(omega, run["p_delivery_pa"], run["p_suction_pa"])

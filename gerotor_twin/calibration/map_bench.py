@@ -4,7 +4,9 @@ Each map is the twin's steady state at chosen parameters (:mod:`.map_synth`) wit
 that the twin's chamber model has no term for, or has only at its edge
 (:mod:`gerotor_twin.model.volumetric`); the calibration (:func:`.calibration_run.calibrate_records`,
 candidate sets :data:`.calibration_run.MAP_CANDIDATES`, leave one speed out) then reports its held-out
-error beside the nominal twin's and the empirical law's.  Added losses (Δp = p_d − p_s [Pa],
+error beside the nominal twin's and the empirical law's.  The grid is :data:`SPEEDS_RPM` × :data:`BARS` at 50 °C
+unless given (``--rpm``, ``--bar``): how many speeds a map has decides which speed laws its folds can tell apart
+(docs/calibration_health.md).  Added losses (Δp = p_d − p_s [Pa],
 n [rev/s], ``Q_th = D n``):
 
 * ``filling``: incomplete filling growing with speed, :math:`ΔQ = 0.05\,(n/n_\max)^2\,Q_{th}`
@@ -32,10 +34,17 @@ from typing import Callable
 import numpy as np
 
 from ..config import load_config
+from ..errors import InputError
 from .command import MAP_CANDIDATES, MAP_PARAMS, calibrate_records
 from .map_synth import synthetic_map
 
-__all__ = ["MAPS", "MapCase", "run", "add_parser"]
+__all__ = ["MAPS", "MapCase", "SPEEDS_RPM", "BARS", "run", "add_parser"]
+
+#: the maps' speeds [rpm]: five, as a maker's map has them (each a third of the default pump's top speed apart
+#: or closer; with three, a fold left out at either end extrapolates over half the range)
+SPEEDS_RPM = (1000.0, 1500.0, 2000.0, 2500.0, 3000.0)
+#: the maps' delivery pressures [bar gauge]
+BARS = (5.0, 12.5, 20.0)
 
 
 @dataclass(frozen=True)
@@ -87,7 +96,7 @@ def _raw(case: MapCase) -> dict:
     return raw
 
 
-def build(case: MapCase, speeds_rpm=(1000, 2000, 3000), bars=(5, 12.5, 20)) -> list:
+def build(case: MapCase, speeds_rpm=SPEEDS_RPM, bars=BARS) -> list:
     """The map of ``case``: the twin's steady state at its truth, less its added loss."""
     from dataclasses import replace
     cfg = load_config()
@@ -116,17 +125,19 @@ def _row(case: MapCase, res: dict) -> dict:
             "law_cv_max_abs": sel["baseline"]["cv_max_abs"], "law_better": sel["baseline_better"]}
 
 
-def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
-    """Build, calibrate and print each map (all of :data:`MAPS`, or those named)."""
+def run(names=None, jobs: int | None = None, out=None, speeds_rpm=SPEEDS_RPM, bars=BARS) -> list[dict]:
+    """Build, calibrate and print each map (all of :data:`MAPS`, or those named) on the grid ``speeds_rpm`` [rpm]
+    × ``bars`` [bar gauge]."""
     out = out or sys.stdout
     rows = []
+    print(f"grid: {', '.join(f'{v:g}' for v in speeds_rpm)} rpm × {', '.join(f'{v:g}' for v in bars)} bar", file=out)
     print("| map | nominal twin: held-out mean \\|η err\\| | chosen set | fit RMSE | held-out mean \\|η err\\| (max) "
           "| 95 % prediction interval, RMS half-width (held-out points inside) | empirical law: held-out mean (max) |", file=out)
     print("|---|---|---|---|---|---|---|", file=out)
     for case in MAPS:
         if names and case.name not in names:
             continue
-        res = calibrate_records(build(case), [f"{case.name}.csv"], params=MAP_PARAMS,
+        res = calibrate_records(build(case, speeds_rpm, bars), [f"{case.name}.csv"], params=MAP_PARAMS,
                                 cv="speed", candidates=MAP_CANDIDATES, jobs=jobs)
         r = _row(case, res)
         rows.append(r)
@@ -136,6 +147,21 @@ def run(names=None, jobs: int | None = None, out=None) -> list[dict]:
               f"{pt(r['law_cv_mean_abs'])} "
               f"({pt(r['law_cv_max_abs'])}){' **better**' if r['law_better'] else ''} |", file=out, flush=True)
     return rows
+
+
+def grid(rpm_text: str | None, bar_text: str | None) -> dict:
+    """``--rpm`` and ``--bar`` of ``bench maps`` → ``speeds_rpm``, ``bars`` (defaults :data:`SPEEDS_RPM`,
+    :data:`BARS`); InputError naming the option when a value is outside the default pump's range or the grid
+    has fewer than two speeds (leave one speed out needs two)."""
+    from ..cli import _floats
+    rng = load_config().range
+    speeds = SPEEDS_RPM if rpm_text is None else _floats(rpm_text, "--rpm")
+    bars = BARS if bar_text is None else _floats(bar_text, "--bar")
+    if len(set(speeds)) < 2 or not all(0 < v <= rng.max_speed_rpm for v in speeds):
+        raise InputError("--rpm", rpm_text, f"two speeds or more in (0, {rng.max_speed_rpm:g}] rpm")
+    if not all(0 < v <= rng.max_delivery_bar for v in bars):
+        raise InputError("--bar", bar_text, f"pressures in (0, {rng.max_delivery_bar:g}] bar gauge")
+    return {"speeds_rpm": tuple(speeds), "bars": tuple(bars)}
 
 
 def add_parser(subparsers) -> None:
@@ -152,7 +178,7 @@ def add_parser(subparsers) -> None:
     def dispatch(args):
         if args.what != "maps":
             return previous(args)
-        rows = run(args.maps.split(",") if args.maps else None, args.jobs)
+        rows = run(args.maps.split(",") if args.maps else None, args.jobs, **grid(args.rpm, args.bar))
         if args.json:
             with open(args.json, "w", encoding="utf-8") as f:
                 json.dump(rows, f, indent=1)

@@ -18,7 +18,11 @@ kinds of loss that no clearance can make, each a physical parameter of the pump 
   :math:`k_f (ω/ω_1)^2 p_{atm}/p_s`, ``k_f`` its value at ω₁ = 1000 rpm and atmospheric suction.
   The chamber model has no such term: its liquid fills every chamber whatever the port's pressure
   drop, down to the vapour pressure (:mod:`gerotor_twin.hydraulics.mixture` leaves dissolved air
-  out).  A deficit proportional to speed³ at a given suction pressure.
+  out).  A deficit proportional to speed³ at a given suction pressure.  With a **filling margin**
+  Δp_m (``filling_margin_pa``, 0 = none) the chambers absorb that much of the inlet's pressure drop before
+  they fill short — the suction pressure's margin over the pressure at which air comes out of solution —
+  and the unfilled fraction is the drop beyond it, :math:`\max(0, k_f p_{atm} (ω/ω_1)^2 - Δp_m)/p_s`: full
+  chambers up to the onset speed :math:`ω_c = ω_1 \sqrt{Δp_m / (k_f p_{atm})}`.
 * **Bypass** ``A_b`` (``bypass_area_m2``, effective area C_d·A, 0 = none): a short,
   turbulent path from delivery to suction (a worn land of the valve plate, a weeping relief
   valve, a housing path): orifice flow, ∝ √Δp, independent of viscosity and speed — unlike
@@ -26,7 +30,7 @@ kinds of loss that no clearance can make, each a physical parameter of the pump 
 
 .. math::
     Q_\mathrm{delivered} = Q_\mathrm{model}
-        - \Big(1 - k_D + \min\Big(1, k_f \Big(\frac{\omega}{\omega_1}\Big)^2 \frac{p_{atm}}{p_s}\Big)\Big)
+        - \Big(1 - k_D + \min\Big(1, \frac{\max(0,\ k_f p_{atm} (\omega/\omega_1)^2 - \Delta p_m)}{p_s}\Big)\Big)
           D \,\frac{\omega}{2\pi}
         - A_b \sqrt{\frac{2\, \max(p_d - p_s, 0)}{\rho}}
 
@@ -44,7 +48,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["EdgeLosses", "displacement_deficit", "filling_deficit", "bypass_flow", "FILLING_REFERENCE_RAD_S",
+__all__ = ["EdgeLosses", "displacement_deficit", "filling_deficit", "filling_onset_rad_s", "bypass_flow", "FILLING_REFERENCE_RAD_S",
            "FILLING_REFERENCE_PA"]
 
 #: ω₁, the speed at which the filling loss is given: 1000 rpm [rad/s]
@@ -68,11 +72,12 @@ def displacement_deficit(omega: float, displacement_m3: float, factor: float) ->
     return (1.0 - factor) * displacement_m3 * omega / (2.0 * math.pi)
 
 
-def filling_deficit(omega: float, p_suction_pa: float, displacement_m3: float, k_fill: float) -> float:
+def filling_deficit(omega: float, p_suction_pa: float, displacement_m3: float, k_fill: float,
+                    margin_pa: float = 0.0) -> float:
     r"""Flow the chambers do not take in because they fill short at speed [m³/s].
 
     .. math::
-        ΔQ = \min\Big(1,\ k_f \Big(\frac{ω}{ω_1}\Big)^2 \frac{p_{atm}}{p_s}\Big)\, D\, \frac{ω}{2π}
+        ΔQ = \min\Big(1,\ \frac{\max(0,\ k_f\, p_{atm} (ω/ω_1)^2 - Δp_m)}{p_s}\Big)\, D\, \frac{ω}{2π}
 
     Parameters
     ----------
@@ -84,16 +89,37 @@ def filling_deficit(omega: float, p_suction_pa: float, displacement_m3: float, k
         Displacement of the ideal profiles [m³/rev].
     k_fill : float
         Unfilled fraction at ω₁ = 1000 rpm and atmospheric suction, k_f [-].
+    margin_pa : float
+        Filling margin Δp_m: the inlet's pressure drop the chambers absorb before they fill short [Pa].
 
     Notes
     -----
-    The small-loss limit of a filling short by the inlet's dynamic pressure over the suction pressure
-    (module doc); meaningful while the fraction is a few per cent.
+    The small-loss limit of a filling short by the inlet's dynamic pressure (beyond the margin) over the
+    suction pressure (module doc); meaningful while the fraction is a few per cent.
     """
     if k_fill <= 0.0:
         return 0.0
-    fraction = k_fill * (omega / FILLING_REFERENCE_RAD_S) ** 2 * FILLING_REFERENCE_PA / max(p_suction_pa, 1e-9)
+    drop = k_fill * FILLING_REFERENCE_PA * (omega / FILLING_REFERENCE_RAD_S) ** 2       # inlet's pressure drop [Pa]
+    fraction = max(0.0, drop - margin_pa) / max(p_suction_pa, 1e-9)
     return min(1.0, fraction) * displacement_m3 * omega / (2.0 * math.pi)
+
+
+def filling_onset_rad_s(k_fill: float, margin_pa: float) -> float:
+    r"""The speed up to which the chambers fill fully, :math:`ω_c = ω_1 \sqrt{Δp_m / (k_f\, p_{atm})}` [rad/s]
+    (0 without a margin; infinite without a filling loss).
+
+    Parameters
+    ----------
+    k_fill : float
+        Unfilled fraction at ω₁ = 1000 rpm and atmospheric suction, k_f [-].
+    margin_pa : float
+        Filling margin Δp_m [Pa].
+    """
+    if margin_pa <= 0.0:
+        return 0.0
+    if k_fill <= 0.0:
+        return math.inf
+    return FILLING_REFERENCE_RAD_S * math.sqrt(margin_pa / (k_fill * FILLING_REFERENCE_PA))
 
 
 def bypass_flow(dp_pa: float, area_m2: float, density_kg_m3: float) -> float:
@@ -119,15 +145,16 @@ class EdgeLosses:
     bypass_area_m2: float        #: A_b, effective area C_d·A [m²]
     density_kg_m3: float         #: ρ at the reference temperature [kg/m³]
     filling_loss: float = 0.0    #: k_f, unfilled fraction at 1000 rpm and atmospheric suction [-]
+    filling_margin_pa: float = 0.0   #: Δp_m, the inlet's pressure drop absorbed before the chambers fill short [Pa]
 
     @classmethod
     def of(cls, cfg, displacement_m3: float) -> "EdgeLosses":
         """From a :class:`~gerotor_twin.config.PumpConfig` and its displacement [m³/rev]."""
         return cls(displacement_m3, cfg.displacement_factor, cfg.bypass_area_m2, cfg.fluid.density_kg_m3,
-                   cfg.filling_loss_at_1000rpm)
+                   cfg.filling_loss_at_1000rpm, cfg.filling_margin_pa)
 
     def flow(self, omega: float, p_delivery_pa: float, p_suction_pa: float) -> float:
         """The flow lost at the edge [m³/s] at speed ``omega`` [rad/s] and the two pressures [Pa abs]."""
         return (displacement_deficit(omega, self.displacement_m3, self.displacement_factor)
-                + filling_deficit(omega, p_suction_pa, self.displacement_m3, self.filling_loss)
+                + filling_deficit(omega, p_suction_pa, self.displacement_m3, self.filling_loss, self.filling_margin_pa)
                 + bypass_flow(p_delivery_pa - p_suction_pa, self.bypass_area_m2, self.density_kg_m3))
