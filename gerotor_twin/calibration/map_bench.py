@@ -40,8 +40,8 @@ from .map_synth import synthetic_map
 
 __all__ = ["MAPS", "MapCase", "SPEEDS_RPM", "BARS", "run", "add_parser"]
 
-#: the maps' speeds [rpm]: five, as a maker's map has them (each a third of the default pump's top speed apart
-#: or closer; with three, a fold left out at either end extrapolates over half the range)
+#: the maps' speeds [rpm]: five, a sixth of the default pump's top speed apart, as a maker's map often has them
+#: (with three, a speed left out at either end is extrapolated over half the range)
 SPEEDS_RPM = (1000.0, 1500.0, 2000.0, 2500.0, 3000.0)
 #: the maps' delivery pressures [bar gauge]
 BARS = (5.0, 12.5, 20.0)

@@ -48,8 +48,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["EdgeLosses", "displacement_deficit", "filling_deficit", "filling_onset_rad_s", "bypass_flow", "FILLING_REFERENCE_RAD_S",
-           "FILLING_REFERENCE_PA"]
+__all__ = ["EdgeLosses", "displacement_deficit", "filling_deficit", "filling_onset_rad_s", "bypass_flow",
+           "FILLING_REFERENCE_RAD_S", "FILLING_REFERENCE_PA"]
 
 #: ω₁, the speed at which the filling loss is given: 1000 rpm [rad/s]
 FILLING_REFERENCE_RAD_S = 1000.0 * math.pi / 30.0
