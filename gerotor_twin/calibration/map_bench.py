@@ -122,7 +122,8 @@ def _row(case: MapCase, res: dict) -> dict:
             "covered": int(np.sum(np.abs(chosen["cv_errors"]) <= np.array(sel["prediction_interval"]["half_width_eta"]))),
             "points": len(chosen["cv_errors"]),
             "law_cv_mean_abs": mean_abs(sel["baseline"]["cv_errors"]),
-            "law_cv_max_abs": sel["baseline"]["cv_max_abs"], "law_better": sel["baseline_better"]}
+            "law_cv_max_abs": sel["baseline"]["cv_max_abs"], "law_better": sel["baseline_better"],
+            "cv_mean_abs_by_rpm": {round(r): e for r, e in sorted(zip(sel["fold_rpm"], sel["chosen_fold_mean_abs"]))}}
 
 
 def run(names=None, jobs: int | None = None, out=None, speeds_rpm=SPEEDS_RPM, bars=BARS) -> list[dict]:
