@@ -135,18 +135,23 @@ def test_command_says_when_the_empirical_law_wins(tmp_path, capsys):
 
 def test_bench_map_subtracts_its_loss_closed_form():
     """Closed form: a constructed map of `bench maps` is the twin's steady flow less the added loss; the
-    filling loss is 5 % × (n/n_max)² of the theoretical flow (at 1500 rpm of 3000: 1.25 %)."""
+    filling loss is 5 % × (n/n_max)² of the theoretical flow (at 1500 rpm of 3000: 1.25 %); with ``--noise`` each
+    flow is that times (1 + noise·z), z from numpy's generator seeded with 1 and the map's name."""
     from gerotor_twin.calibration.map_bench import MAPS, _raw, build
     case = next(c for c in MAPS if c.name == "filling")
     got = build(case, speeds_rpm=(1500,), bars=(5,))[0]
     plain = synthetic_map(_raw(case), [(got.omega, got.p_delivery_pa, got.oil_temperature_c)])[0]
     qth = load_config().gears.displacement_closed_form() * 25.0
     assert plain.flow_m3s - got.flow_m3s == pytest.approx(0.0125 * qth, rel=1e-12)
+    noisy = build(case, speeds_rpm=(1500,), bars=(5,), noise=0.002)[0]     # numpy's generator, seeded as documented
+    z = np.random.default_rng([1, *b"filling"]).standard_normal(1)[0]
+    assert noisy.flow_m3s == pytest.approx(got.flow_m3s * (1 + 0.002 * z), rel=1e-12) and z != 0.0
 
 
-def test_bench_maps_grid_checked_in_one_line():
+def test_bench_maps_grid_checked_in_one_line(capsys):
     """Behaviour: ``bench maps --rpm/--bar`` give the maps' grid; one speed (leave one speed out needs two), a
-    speed above the pump's range or a pressure ≤ 0 is an InputError naming the option."""
+    speed above the pump's range or a pressure ≤ 0 is an InputError naming the option; so is a negative
+    ``--noise`` (one line, exit 2, nothing run)."""
     from gerotor_twin.calibration.map_bench import BARS, SPEEDS_RPM, grid
     assert grid(None, None) == {"speeds_rpm": SPEEDS_RPM, "bars": BARS}
     assert grid("1000,2000", "5") == {"speeds_rpm": (1000.0, 2000.0), "bars": (5.0,)}
@@ -155,6 +160,9 @@ def test_bench_maps_grid_checked_in_one_line():
         with pytest.raises(InputError) as err:
             grid(rpm, bar)
         assert str(err.value).startswith(f"{option} = "), (rpm, bar, str(err.value))
+    assert main(["bench", "maps", "--noise", "-0.01"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --noise = -0.01 is invalid") and "\n" not in err, err
 
 
 def test_solve_holds_a_bounded_coordinate_unless_the_data_pull_it_in():

@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 
 from ..config import load_config
-from ..errors import InputError
+from ..errors import InputError, check_range
 from .command import MAP_CANDIDATES, MAP_PARAMS, calibrate_records
 from .map_synth import synthetic_map
 
@@ -96,18 +96,24 @@ def _raw(case: MapCase) -> dict:
     return raw
 
 
-def build(case: MapCase, speeds_rpm=SPEEDS_RPM, bars=BARS) -> list:
-    """The map of ``case``: the twin's steady state at its truth, less its added loss."""
+def build(case: MapCase, speeds_rpm=SPEEDS_RPM, bars=BARS, noise: float = 0.0, seed: int = 1) -> list:
+    """The map of ``case``: the twin's steady state at its truth, less its added loss; with ``noise`` > 0 each
+    flow times (1 + ``noise``·z), z standard normal (numpy's generator seeded with ``seed`` and the map's name),
+    as a test house's flow meter reads it."""
     from dataclasses import replace
     cfg = load_config()
     pts = [(rpm * math.pi / 30, cfg.fluid.atmospheric_pa + bar * 1e5, t)
            for rpm in speeds_rpm for bar in bars for t in case.temperatures]
     recs = synthetic_map(_raw(case), pts, source=f"{case.name}.csv")
-    if case.loss is None:
-        return recs
     p_s = cfg.boundary.suction_pressure_pa
-    return [replace(r, flow_m3s=r.flow_m3s - case.loss(cfg, r.omega, r.p_delivery_pa - p_s, r.oil_temperature_c))
-            for r in recs]
+    if case.loss is not None:
+        recs = [replace(r, flow_m3s=r.flow_m3s - case.loss(cfg, r.omega, r.p_delivery_pa - p_s, r.oil_temperature_c))
+                for r in recs]
+    if noise > 0:
+        rng = np.random.default_rng([seed, *case.name.encode()])
+        z = rng.standard_normal(len(recs))
+        recs = [replace(r, flow_m3s=r.flow_m3s * (1.0 + noise * zi)) for r, zi in zip(recs, z)]
+    return recs
 
 
 def _row(case: MapCase, res: dict) -> dict:
@@ -126,19 +132,21 @@ def _row(case: MapCase, res: dict) -> dict:
             "cv_mean_abs_by_rpm": {round(r): e for r, e in sorted(zip(sel["fold_rpm"], sel["chosen_fold_mean_abs"]))}}
 
 
-def run(names=None, jobs: int | None = None, out=None, speeds_rpm=SPEEDS_RPM, bars=BARS) -> list[dict]:
+def run(names=None, jobs: int | None = None, out=None, speeds_rpm=SPEEDS_RPM, bars=BARS,
+        noise: float = 0.0) -> list[dict]:
     """Build, calibrate and print each map (all of :data:`MAPS`, or those named) on the grid ``speeds_rpm`` [rpm]
-    × ``bars`` [bar gauge]."""
+    × ``bars`` [bar gauge], each flow with a relative error of standard deviation ``noise`` [-] (:func:`build`)."""
     out = out or sys.stdout
     rows = []
-    print(f"grid: {', '.join(f'{v:g}' for v in speeds_rpm)} rpm × {', '.join(f'{v:g}' for v in bars)} bar", file=out)
+    print(f"grid: {', '.join(f'{v:g}' for v in speeds_rpm)} rpm × {', '.join(f'{v:g}' for v in bars)} bar"
+          + (f"; flows with {100 * noise:g} % noise (sd)" if noise > 0 else ""), file=out)
     print("| map | nominal twin: held-out mean \\|η err\\| | chosen set | fit RMSE | held-out mean \\|η err\\| (max) "
           "| 95 % prediction interval, RMS half-width (held-out points inside) | empirical law: held-out mean (max) |", file=out)
     print("|---|---|---|---|---|---|---|", file=out)
     for case in MAPS:
         if names and case.name not in names:
             continue
-        res = calibrate_records(build(case, speeds_rpm, bars), [f"{case.name}.csv"], params=MAP_PARAMS,
+        res = calibrate_records(build(case, speeds_rpm, bars, noise), [f"{case.name}.csv"], params=MAP_PARAMS,
                                 cv="speed", candidates=MAP_CANDIDATES, jobs=jobs)
         r = _row(case, res)
         rows.append(r)
@@ -174,12 +182,16 @@ def add_parser(subparsers) -> None:
     bench.add_argument("--maps", help="bench maps: comma-separated map names (default all: "
                                       + ", ".join(c.name for c in MAPS) + ")")
     bench.add_argument("--jobs", type=int, default=None, help="bench maps: worker processes (default: all cores)")
+    bench.add_argument("--noise", type=float, default=0.0,
+                       help="bench maps: relative error of each map flow, standard deviation (e.g. 0.002; default 0)")
     previous = bench.get_default("func")
 
     def dispatch(args):
         if args.what != "maps":
             return previous(args)
-        rows = run(args.maps.split(",") if args.maps else None, args.jobs, **grid(args.rpm, args.bar))
+        check_range("--noise", args.noise, 0.0, 0.1)
+        rows = run(args.maps.split(",") if args.maps else None, args.jobs, **grid(args.rpm, args.bar),
+                   noise=args.noise)
         if args.json:
             with open(args.json, "w", encoding="utf-8") as f:
                 json.dump(rows, f, indent=1)
