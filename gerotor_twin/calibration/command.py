@@ -393,7 +393,7 @@ def _print_onset(parameters: list[dict], out) -> None:
     by = {p["name"]: p for p in parameters}
     if "filling_margin" in by and "filling" in by and by["filling_margin"]["value"] > 0 and by["filling"]["value"] > 0:
         onset = filling_onset_rad_s(by["filling"]["value"], by["filling_margin"]["value"])
-        print(f"  filling onset: chambers full up to {rad_s_to_rpm(onset):.0f} rpm at atmospheric suction "
+        print(f"  filling onset: chambers full up to {rad_s_to_rpm(onset):.0f} rpm "
               "(√(filling_margin / (filling · p_atm)) × 1000 rpm)", file=out)
 
 

@@ -22,7 +22,8 @@ kinds of loss that no clearance can make, each a physical parameter of the pump 
   Δp_m (``filling_margin_pa``, 0 = none) the chambers absorb that much of the inlet's pressure drop before
   they fill short — the suction pressure's margin over the pressure at which air comes out of solution —
   and the unfilled fraction is the drop beyond it, :math:`\max(0, k_f p_{atm} (ω/ω_1)^2 - Δp_m)/p_s`: full
-  chambers up to the onset speed :math:`ω_c = ω_1 \sqrt{Δp_m / (k_f p_{atm})}`.
+  chambers up to the onset speed :math:`ω_c = ω_1 \sqrt{Δp_m / (k_f p_{atm})}`.  Δp_m is a fixed pressure, the
+  margin at the suction pressure it was fitted at; how the margin moves with another suction pressure is left out.
 * **Bypass** ``A_b`` (``bypass_area_m2``, effective area C_d·A, 0 = none): a short,
   turbulent path from delivery to suction (a worn land of the valve plate, a weeping relief
   valve, a housing path): orifice flow, ∝ √Δp, independent of viscosity and speed — unlike
