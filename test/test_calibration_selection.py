@@ -131,6 +131,7 @@ def test_command_says_when_the_empirical_law_wins(tmp_path, capsys):
     assert load_config(out).calibration["selection"]["baseline_better"] is True
     html = page.read_text()
     assert "held-out RMSE [pt]" in html and "The empirical law predicts the held-out points better" in html
+    assert "Its held-out |η_v error| by speed (mean): 1000 rpm " in html
 
 
 def test_bench_map_subtracts_its_loss_closed_form():

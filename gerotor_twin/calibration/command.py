@@ -413,11 +413,10 @@ def print_selection(sel: dict, out=None) -> None:
             print(f"    ({'+'.join(c['params'])}: {', '.join(c['held_at_prior'])} kept at the prior by the "
                   f"identifiability analysis, --rcond {c.get('rcond', 0.1):g})", file=out)
     print(f"  chosen: {sel['reason']}", file=out)
-    if sel["cv"] == "speed" and "fold_rpm" in sel:
-        by_speed = sorted(zip(sel["fold_rpm"], sel["chosen_fold_mean_abs"]))
+    by_speed = S.held_out_by_speed(sel)
+    if by_speed:
         print("  its held-out |η error| by speed (mean [pt]): "
-              + ", ".join(f"{rpm:.0f} rpm {_pt(e)}" for rpm, e in by_speed)
-              + " (the lowest and highest speeds held out are predicted beyond the speeds fitted)", file=out)
+              + ", ".join(f"{rpm:.0f} rpm {_pt(e)}" for rpm, e in by_speed) + f" ({S.BY_SPEED_NOTE})", file=out)
     pi = sel.get("prediction_interval")
     if pi:
         print(f"  prediction interval of η_v (95 %): ± {_pt(pi['twin_half_width_eta'])} pt for the twin (model-form "

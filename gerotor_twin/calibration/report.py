@@ -12,6 +12,7 @@ from pathlib import Path
 
 from ..units import m3s_to_lpm
 from .fit_model import display_value
+from .selection import BY_SPEED_NOTE, held_out_by_speed
 
 __all__ = ["write_report"]
 
@@ -74,9 +75,13 @@ def _selection(sel: dict | None) -> str:
     band = (f"<p>95 % prediction interval of a predicted η_v: ± {100 * pi['typical_half_width_eta']:.2f} pt (RMS over "
             f"the plateaus): model-form error {100 * pi['model_form_sd_eta']:.2f} pt sd from {pi['held_out']} held-out "
             f"plateaus, with the parameters' and the measurement's parts per plateau (table below).</p>") if pi else ""
+    speeds = held_out_by_speed(sel)
+    by_speed = ("<p>Its held-out |η_v error| by speed (mean): "
+                + ", ".join(f"{rpm:.0f} rpm {100 * e:.2f} pt" for rpm, e in speeds)
+                + f" ({BY_SPEED_NOTE}).</p>") if speeds else ""
     return (f"<h2>Parameter set (leave one {html.escape(sel['cv'])} out, {len(sel['folds'])} folds)</h2>"
             + _table(["set", "fit RMSE [pt]", "held-out RMSE [pt]", "held-out max [pt]"], rows)
-            + f"<p>Chosen: {html.escape(sel['reason'])}.</p>{band}{verdict}" + _heldout(sel))
+            + f"<p>Chosen: {html.escape(sel['reason'])}.</p>{by_speed}{band}{verdict}" + _heldout(sel))
 
 
 def _heldout(sel: dict) -> str:

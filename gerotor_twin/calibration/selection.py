@@ -38,6 +38,7 @@ from . import fit as C
 from . import prediction as P
 
 __all__ = ["folds", "resolve_scheme", "candidate_sets", "Candidate", "cross_validate", "baseline", "choose", "prediction_band",
+           "held_out_by_speed", "BY_SPEED_NOTE",
            "CV_SCHEMES"]
 
 CV_SCHEMES = ("speed", "point")
@@ -182,6 +183,18 @@ def choose(cands: list[Candidate], noise: float = 0.0) -> tuple[Candidate, str]:
                f"RMSE ({100 * pick.cv_rmse:.2f} ≤ {100 * best.cv_rmse:.2f} + {100 * margin:.2f} pt, "
                f"{'+'.join(best.names)})")
     return pick, why
+
+
+def held_out_by_speed(sel: dict) -> list[tuple[float, float]]:
+    """(speed [rpm], the chosen set's mean |η error| held out [-]) per fold of a leave-one-speed-out selection
+    (the dict :func:`.command.calibrate_records` returns as ``selection``), by speed; empty for other schemes."""
+    if sel.get("cv") != "speed" or "fold_rpm" not in sel:
+        return []
+    return sorted(zip(sel["fold_rpm"], sel["chosen_fold_mean_abs"]))
+
+
+#: what the by-speed line adds: the end speeds are extrapolated
+BY_SPEED_NOTE = "the lowest and highest speeds held out are predicted beyond the speeds fitted"
 
 
 def prediction_band(cand: Candidate, level: float = 0.95, param_var: float = 0.0, meas_var: float = 0.0) -> float:
