@@ -12,8 +12,8 @@ n [rev/s], ``Q_th = D n``):
 * ``filling``: incomplete filling growing with speed, :math:`ΔQ = 0.05\,(n/n_\max)^2\,Q_{th}`
   (the suction's pressure drop rising as n²; the twin's ``volumetric.filling_loss_at_1000rpm`` has this law);
 * ``filling_onset``: a filling loss that sets in at a speed, the chambers full below n_c = n_max/3,
-  :math:`ΔQ = 0.05\,(\max(0, n - n_c)/(n_\max - n_c))^2\,Q_{th}` (a suction margin used up at n_c: a law
-  the twin's filling term, ∝ n² from rest, does not have);
+  :math:`ΔQ = 0.05\,(\max(0, n - n_c)/(n_\max - n_c))^2\,Q_{th}` (a suction margin used up at n_c; the twin's
+  filling term with its margin ``volumetric.filling_margin_pa`` has an onset too, but grows as n² − n_c² beyond it);
 * ``deforming_gap``: a laminar path of its own whose gap opens with pressure (plates and housing deflect),
   :math:`ΔQ = G\,Δp\,(1 + Δp/p^*)^3 μ_{40}/μ(T)`, G giving 1 % of Q_th at 1000 rpm and 5 bar at 40 °C,
   p* = 40 bar (the twin's ``clearances.lateral_opening_m_per_pa`` has this form, but on its lateral gaps,
@@ -81,8 +81,8 @@ MAPS = (
             {"displacement_factor": 0.97, "bypass_area_m2": 0.5e-6}, None, 1.0, (30.0, 60.0)),
     MapCase("filling", "filling loss 5 % × (n/n_max)², gaps × 1.1 (the twin's filling term has the law)", {},
             _filling, 1.1),
-    MapCase("filling_onset", "filling loss from n_max/3, 5 % × ((n − n_c)/(n_max − n_c))², gaps × 1.1 (not in the "
-                             "twin)", {}, _filling_onset, 1.1),
+    MapCase("filling_onset", "filling loss from n_max/3, 5 % × ((n − n_c)/(n_max − n_c))², gaps × 1.1 (the twin's "
+                             "filling margin has an onset, with another law beyond it)", {}, _filling_onset, 1.1),
     MapCase("deforming_gap", "a path of its own whose gap opens with pressure, (1 + Δp/40 bar)³ (the twin's lateral "
                              "opening has the form on its own gaps)", {}, _deforming_gap),
 )
