@@ -62,3 +62,61 @@ def test_clip_half_plane_closed_forms():
     assert area(L_SHAPE - [0.0, 2.0], [0.0, 1.0]) == pytest.approx(1.0, abs=1e-15)     # the arm above y = 2
     assert area(L_SHAPE - [0.5, 0.0], [-1.0, 0.0]) == pytest.approx(1.5, abs=1e-15)    # left of x = 0.5: 0.5 × 3
     assert area(square(0, 0, 1), [-1.0, 0.0]) == 0.0                                   # touches x = 0 only
+
+
+def _dense_crossing_test(m, poly):
+    """The textbook crossing-number test over every (point, edge) pair [Haines 1994], the reference below."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    ya, yb = a[:, 1][None, :], b[:, 1][None, :]
+    crosses = (ya > m[:, 1:2]) != (yb > m[:, 1:2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xint = a[:, 0][None, :] + (m[:, 1:2] - ya) * ((b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))[None, :]
+    return (np.count_nonzero(crosses & (m[:, 0:1] < xint), axis=1) % 2) == 1
+
+
+def test_points_inside():
+    """Closed form: points of the L-shape's arms and notch, and points on the level of its vertices (the
+    ties of the sorted sweep), are in or out as drawn; against the dense crossing-number test over every
+    pair, the same answer point for point on a star polygon with level edges and 4000 random points, many
+    on the vertices' y (behaviour: the pairs the sweep leaves out never cross)."""
+    from gerotor_twin.geometry.overlap import points_inside
+    pts = np.array([[0.5, 2.5], [2.5, 0.5], [2.0, 2.0], [0.5, 0.5], [-0.5, 1.0], [0.5, 1.0], [2.0, 1.0],
+                    [0.5, 3.0], [0.5, 0.0], [3.5, 0.5]])
+    assert points_inside(pts, L_SHAPE).tolist() == [True, True, False, True, False, True, False, False, True,
+                                                    False]
+    rng = np.random.default_rng(5)
+    k = np.arange(40)
+    r = np.where(k % 2 == 0, 1.0, 0.45)
+    star = np.column_stack([r * np.cos(k * np.pi / 20), r * np.sin(k * np.pi / 20)])
+    star = np.vstack([star[:10], [star[9, 0] - 0.3, star[9, 1]], star[10:]])           # a level edge
+    m = rng.uniform(-1.1, 1.1, (4000, 2))
+    m[::3, 1] = rng.choice(star[:, 1], len(m[::3]))                                     # on a vertex's y
+    assert np.array_equal(points_inside(m, star), _dense_crossing_test(m, star))
+    assert points_inside(np.zeros((0, 2)), star).shape == (0,)
+
+
+def test_overlapping_boxes():
+    """Behaviour: the box pairs the sorted sweep finds are ``np.nonzero`` of the dense test over every pair, in
+    the same order: boxes of every width (points, a long edge's box, zero-width vertical edges), touching boxes
+    included, and no boxes at all."""
+    from gerotor_twin.geometry.overlap import _overlapping_boxes
+
+    def dense(lo_p, hi_p, lo_q, hi_q):
+        return np.nonzero((lo_p[:, None, 0] <= hi_q[None, :, 0]) & (lo_q[None, :, 0] <= hi_p[:, None, 0])
+                          & (lo_p[:, None, 1] <= hi_q[None, :, 1]) & (lo_q[None, :, 1] <= hi_p[:, None, 1]))
+
+    rng = np.random.default_rng(11)
+    for n_p, n_q in ((300, 200), (7, 500), (1, 1)):
+        boxes = []
+        for n in (n_p, n_q):
+            lo = rng.uniform(0, 10, (n, 2))
+            size = rng.exponential(0.2, (n, 2)) * rng.choice([0.0, 1.0, 30.0], (n, 2), p=[0.2, 0.7, 0.1])
+            lo[::5] = np.round(lo[::5])                                        # shared coordinates: touching
+            boxes += [lo, lo + np.round(size, 1)]
+        i, k = _overlapping_boxes(*boxes)
+        ref_i, ref_k = dense(*boxes)
+        assert np.array_equal(i, ref_i) and np.array_equal(k, ref_k)
+        assert len(i) > 0 or n_p == 1
+    empty = np.zeros((0, 2))
+    assert len(_overlapping_boxes(empty, empty, boxes[2], boxes[3])[0]) == 0
+    assert len(_overlapping_boxes(boxes[0], boxes[1], empty, empty)[0]) == 0

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["intersection_area"]
+__all__ = ["intersection_area", "points_inside"]
 
 _REL_TOL = 1e-12   # "on the other boundary": distance below this × the bounding-box diagonal
 
@@ -46,15 +46,42 @@ def _cross(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
+def _overlapping_boxes(lo_p, hi_p, lo_q, hi_q):
+    """The pairs (i, k) of boxes [lo_p[i], hi_p[i]] and [lo_q[k], hi_q[k]] (closed, in x and y) that overlap, in
+    row-major order: ``np.nonzero`` of the dense M × K test, without forming it.
+
+    The boxes of q no wider in x than nine in ten of them (an edge's box: most are short) are sorted by their low
+    x; such a box can overlap box i only if its low x lies within [lo_p[i] − 2 w, hi_p[i]] (w: that width), one
+    slice of the sorted boxes.  The wider tenth is tested against every box of p.  Every candidate then passes
+    the dense test's four comparisons, so the pairs are the same.
+    """
+    width = hi_q[:, 0] - lo_q[:, 0]
+    if len(width) == 0 or len(lo_p) == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    w = float(np.quantile(width, 0.9))
+    narrow = np.nonzero(width <= w)[0]
+    narrow = narrow[np.argsort(lo_q[narrow, 0], kind="stable")]
+    first = np.searchsorted(lo_q[narrow, 0], lo_p[:, 0] - 2.0 * w, side="left")
+    count = np.searchsorted(lo_q[narrow, 0], hi_p[:, 0], side="right") - first
+    i = np.repeat(np.arange(len(lo_p)), count)
+    k = narrow[np.repeat(first - (np.cumsum(count) - count), count) + np.arange(len(i))]
+    wide = np.nonzero(width > w)[0]
+    i = np.concatenate([i, np.repeat(np.arange(len(lo_p)), len(wide))])
+    k = np.concatenate([k, np.tile(wide, len(lo_p))])
+    near = ((lo_p[i, 0] <= hi_q[k, 0]) & (lo_q[k, 0] <= hi_p[i, 0])
+            & (lo_p[i, 1] <= hi_q[k, 1]) & (lo_q[k, 1] <= hi_p[i, 1]))
+    i, k = i[near], k[near]
+    order = np.lexsort((k, i))
+    return i[order], k[order]
+
+
 def _split_parameters(p0, d, q0, e, tol):
     """(edge index, t) pairs, t ∈ [0, 1] along the edges p0 + t d, where an edge q0 + s e of the other
     polygon crosses, or where a collinear edge of the other polygon starts or stops along it.  Only the
     edge pairs whose bounding boxes overlap are tested."""
     lo_p, hi_p = np.minimum(p0, p0 + d) - tol, np.maximum(p0, p0 + d) + tol
     lo_q, hi_q = np.minimum(q0, q0 + e), np.maximum(q0, q0 + e)
-    near = ((lo_p[:, None, 0] <= hi_q[None, :, 0]) & (lo_q[None, :, 0] <= hi_p[:, None, 0])
-            & (lo_p[:, None, 1] <= hi_q[None, :, 1]) & (lo_q[None, :, 1] <= hi_p[:, None, 1]))
-    i, k = np.nonzero(near)
+    i, k = _overlapping_boxes(lo_p, hi_p, lo_q, hi_q)
     di, ek = d[i], e[k]
     r = q0[k] - p0[i]
     den = _cross(di, ek)
@@ -73,14 +100,33 @@ def _split_parameters(p0, d, q0, e, tol):
     return idx[ok], ts[ok], np.unique(i[coll])
 
 
-def _inside(m, poly):
-    """Crossing-number test of the points m (M, 2) against a polygon (K, 2) [2]."""
-    a, b = poly, np.roll(poly, -1, axis=0)
-    ya, yb = a[:, 1][None, :], b[:, 1][None, :]
-    crosses = (ya > m[:, 1:2]) != (yb > m[:, 1:2])
+def points_inside(m: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Even-odd (crossing-number) test of the points m (M, 2) against a closed polygon (K, 2) [2].
+
+    A point is inside when a ray from it towards +x crosses the boundary an odd number of times; an edge
+    counts when its ends straddle the point's y (one strictly above, the other not) and it crosses the
+    ray's line to the right of the point, at x = x_a + (y − y_a) · ((x_b − x_a) / (y_b − y_a)).
+
+    Only the (point, edge) pairs whose y straddles are formed: the points sorted by y, each edge's pairs
+    are one slice of them (``searchsorted``), so the cost is O((M + K) log M) plus the pairs, not O(M K);
+    each pair's crossing is the same floating-point expression as the dense M × K test, so the answer is
+    the same bit for bit.
+    """
+    m = np.asarray(m, dtype=float).reshape(-1, 2)
+    a = np.asarray(poly, dtype=float)
+    b = np.roll(a, -1, axis=0)
+    order = np.argsort(m[:, 1], kind="stable")
+    ys = m[order, 1]
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    first = np.searchsorted(ys, lo, side="left")          # straddle: lo <= y < hi (never for a level edge)
+    count = np.searchsorted(ys, hi, side="left") - first
+    edge = np.repeat(np.arange(len(a)), count)
+    start = np.repeat(np.cumsum(count) - count, count)
+    pt = order[np.repeat(first, count) + np.arange(len(edge)) - start]
     with np.errstate(divide="ignore", invalid="ignore"):
-        xint = a[:, 0][None, :] + (m[:, 1:2] - ya) * ((b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))[None, :]
-    return (np.count_nonzero(crosses & (m[:, 0:1] < xint), axis=1) % 2) == 1
+        slope = (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    xint = a[edge, 0] + (m[pt, 1] - a[edge, 1]) * slope[edge]
+    return np.bincount(pt[m[pt, 0] < xint], minlength=len(m)) % 2 == 1
 
 
 def _on_boundary(m, poly, tol):
@@ -114,7 +160,7 @@ def _inside_pieces(p, other, tol, keep_same_direction):
     base, dir_ = p[cand][e0], d[cand][e0]
     s, f = base + ta[:, None] * dir_, base + tb[:, None] * dir_
     mid = 0.5 * (s + f)
-    use = _inside(mid, other)
+    use = points_inside(mid, other)
     shared = np.nonzero(np.isin(e0, collinear))[0]     # only pieces of edges running along the other's
     if len(shared):
         on, tangent = _on_boundary(mid[shared], other, tol)

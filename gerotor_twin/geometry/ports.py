@@ -81,7 +81,7 @@ import numpy as np
 
 from ..errors import InputError
 from .chambers import chamber_dA_dtheta_closed_form, chamber_polygon, ideal, polygon_area
-from .overlap import intersection_area
+from .overlap import intersection_area, points_inside
 
 __all__ = ["Port", "Notch", "CLOSING_EDGES", "NOTCH_SHAPES", "clip_half_plane", "open_area", "closing_cut",
            "dead_centres", "SealingLands", "sealing_lands", "dead_centre_reach", "geometry_port_angles",
@@ -286,17 +286,6 @@ def notch_span(port: Port, edge: str) -> tuple[float, float]:
     return port.end, port.end + port.closing_notch.length
 
 
-def _inside(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Even-odd point-in-polygon test of points (K, 2) against a closed polygon (M, 2)."""
-    x, y = poly[:, 0], poly[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    px, py = pts[:, 0:1], pts[:, 1:2]
-    straddle = (y > py) != (yn > py)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xc = x + (py - y) * (xn - x) / (yn - y)
-    return (np.count_nonzero(straddle & (px < xc), axis=1) % 2) == 1
-
-
 def arc_coverage(poly: np.ndarray, radius: float, a0: float, a1: float) -> list[tuple[float, float]]:
     """Parts of the arc of ``radius`` [m] about O1 from angle ``a0`` to ``a1`` [rad] (a0 < a1, span < 2π)
     inside the polygon, as angle intervals [rad].
@@ -322,7 +311,7 @@ def arc_coverage(poly: np.ndarray, radius: float, a0: float, a1: float) -> list[
         cuts.extend(ang[(ang > a0) & (ang < a1)].tolist())
     cuts = np.unique(np.asarray(cuts))
     centres = 0.5 * (cuts[:-1] + cuts[1:])
-    inside = _inside(poly, radius * np.column_stack([np.cos(centres), np.sin(centres)]))
+    inside = points_inside(radius * np.column_stack([np.cos(centres), np.sin(centres)]), poly)
     return [(float(cuts[i]), float(cuts[i + 1])) for i in np.nonzero(inside)[0]]
 
 
