@@ -51,7 +51,7 @@ def _rhs(m, op, tau, state, e, t=0.0):
     z = np.concatenate([state.log_density, e])
     z[m.N] = 0.0
     out = np.empty(m.N + 3)
-    CR.coupled_rhs(t, z, state.theta, tau, m.kernel, op, m._ws, out)
+    CR.coupled_rhs(t, z, state.theta, tau, m.kernel, op, m._ws, out, True)   # the types of CR._system's calls
     return z, out
 
 
@@ -108,11 +108,7 @@ def test_the_constrained_twin_follows_the_coupled_reference(setup):
     cfg, m, inp, op, tau, state = setup
     h = m.step_size(inp.omega)
     z, _out = _rhs(m, op, tau, state, state.eccentricity)
-    out = np.empty(m.N + 3)
-
-    def f(t, zz):
-        CR.coupled_rhs(t, zz, state.theta, tau, m.kernel, op, m._ws, out)
-        return out.copy()
+    f, _atol = CR._system(m, op, state.theta, tau)
     atol = np.full(m.N + 3, 1e-9)
     atol[m.N + 1:] = 1e-11
     ts = h * np.arange(1, 21)

@@ -143,8 +143,8 @@ def _system(model, op, theta0: float, tau: float, full: bool = True):
     """The coupled system's right-hand side f(t, z) with θ = θ₀ + ωt [rad], and Radau's absolute tolerances."""
     n, out = model.N, np.empty(model.N + 3)
 
-    def f(t, zz):
-        coupled_rhs(t, zz, theta0, tau, model.kernel, op, model._ws, out, full)
+    def f(t, zz):      # one compiled specialisation for every caller: z C-contiguous, ``full`` a bool
+        coupled_rhs(t, np.ascontiguousarray(zz), theta0, tau, model.kernel, op, model._ws, out, bool(full))
         return out.copy()
     atol = np.full(n + 3, 1e-9)
     atol[n] = 1e-12
