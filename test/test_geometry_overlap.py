@@ -120,3 +120,11 @@ def test_overlapping_boxes():
     empty = np.zeros((0, 2))
     assert len(_overlapping_boxes(empty, empty, boxes[2], boxes[3])[0]) == 0
     assert len(_overlapping_boxes(boxes[0], boxes[1], empty, empty)[0]) == 0
+
+
+def test_cyclic_next():
+    """Behaviour: a polygon's next vertices are numpy's roll by −1 along the first axis, element for element, for
+    vertex arrays (K, 2), coordinate arrays (K,), one vertex and none."""
+    from gerotor_twin.geometry.overlap import cyclic_next
+    for a in (L_SHAPE, L_SHAPE[:, 1], L_SHAPE[:1], np.zeros((0, 2))):
+        assert np.array_equal(cyclic_next(a), np.roll(a, -1, axis=0)) and cyclic_next(a).shape == a.shape

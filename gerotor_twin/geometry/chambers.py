@@ -31,6 +31,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .gerotor import GerotorGeometry
+from .overlap import cyclic_next
 
 __all__ = ["ideal", "contact_points", "chamber_polygon", "chamber_area", "polygon_area",
            "chamber_dA_dtheta_closed_form", "force_projections", "ChamberSample"]
@@ -142,7 +143,7 @@ def chamber_polygon(g: GerotorGeometry, theta: float, j: int, n_inner: int = 400
 def polygon_area(poly: np.ndarray) -> float:
     """Signed shoelace area of a closed polygon (K, 2) [m²] (CCW positive)."""
     x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    return 0.5 * float(np.dot(x, cyclic_next(y)) - np.dot(y, cyclic_next(x)))
 
 
 def chamber_area(g: GerotorGeometry, theta: float, j: int = 0, **kw) -> float:

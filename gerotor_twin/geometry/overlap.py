@@ -27,18 +27,25 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["intersection_area", "points_inside"]
+__all__ = ["intersection_area", "points_inside", "cyclic_next"]
 
 _REL_TOL = 1e-12   # "on the other boundary": distance below this × the bounding-box diagonal
+
+
+def cyclic_next(a: np.ndarray) -> np.ndarray:
+    """Element i + 1 at i along the first axis, the first at the last: a polygon's next vertices (the same array as
+    ``np.roll(a, -1, axis=0)``, without its general index arithmetic, which costs more than the copy on a
+    polygon's few hundred vertices)."""
+    return np.concatenate((a[1:], a[:1]))
 
 
 def _ccw(poly: np.ndarray) -> np.ndarray:
     """The polygon (K, 2) counter-clockwise, without repeated consecutive vertices."""
     p = np.asarray(poly, dtype=float)
-    keep = np.any(p != np.roll(p, 1, axis=0), axis=1)
+    keep = np.any(p != np.concatenate((p[-1:], p[:-1])), axis=1)   # vs the previous vertex
     p = p[keep] if keep.any() else p[:1]
     x, y = p[:, 0], p[:, 1]
-    signed = np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))
+    signed = np.dot(x, cyclic_next(y)) - np.dot(y, cyclic_next(x))
     return p[::-1] if signed < 0 else p
 
 
@@ -114,7 +121,7 @@ def points_inside(m: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """
     m = np.asarray(m, dtype=float).reshape(-1, 2)
     a = np.asarray(poly, dtype=float)
-    b = np.roll(a, -1, axis=0)
+    b = cyclic_next(a)
     order = np.argsort(m[:, 1], kind="stable")
     ys = m[order, 1]
     lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
@@ -132,7 +139,7 @@ def points_inside(m: np.ndarray, poly: np.ndarray) -> np.ndarray:
 def _on_boundary(m, poly, tol):
     """Points m (M, 2) within ``tol`` of an edge of the polygon, and that edge's direction."""
     a = poly
-    e = np.roll(poly, -1, axis=0) - a
+    e = cyclic_next(poly) - a
     w = m[:, None, :] - a[None, :, :]
     s = np.clip(np.einsum("mkj,kj->mk", w, e) / np.einsum("kj,kj->k", e, e), 0.0, 1.0)
     dist2 = np.sum((w - s[..., None] * e[None, :, :]) ** 2, axis=2)
@@ -144,12 +151,12 @@ def _inside_pieces(p, other, tol, keep_same_direction):
     """½ Σ (x dy − y dx) over the pieces of ∂p inside ``other`` (and, if ``keep_same_direction``,
     the pieces on ∂other running the same way).  Edges of p outside the other's bounding box are
     outside it and are skipped."""
-    d = np.roll(p, -1, axis=0) - p
+    d = cyclic_next(p) - p
     lo, hi = other.min(axis=0) - tol, other.max(axis=0) + tol
     cand = np.nonzero(np.all((np.minimum(p, p + d) <= hi) & (np.maximum(p, p + d) >= lo), axis=1))[0]
     if len(cand) == 0:
         return 0.0
-    idx, ts, collinear = _split_parameters(p[cand], d[cand], other, np.roll(other, -1, axis=0) - other, tol)
+    idx, ts, collinear = _split_parameters(p[cand], d[cand], other, cyclic_next(other) - other, tol)
     n = len(cand)
     edge = np.concatenate([np.arange(n), np.arange(n), idx])
     t = np.concatenate([np.zeros(n), np.ones(n), ts])

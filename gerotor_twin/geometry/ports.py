@@ -81,7 +81,7 @@ import numpy as np
 
 from ..errors import InputError
 from .chambers import chamber_dA_dtheta_closed_form, chamber_polygon, ideal, polygon_area
-from .overlap import intersection_area, points_inside
+from .overlap import cyclic_next, intersection_area, points_inside
 
 __all__ = ["Port", "Notch", "CLOSING_EDGES", "NOTCH_SHAPES", "clip_half_plane", "open_area", "closing_cut",
            "dead_centres", "SealingLands", "sealing_lands", "dead_centre_reach", "geometry_port_angles",
@@ -172,8 +172,8 @@ def clip_half_plane(poly: np.ndarray, normal: np.ndarray) -> np.ndarray:
     if len(poly) == 0:
         return poly
     d = poly @ normal
-    nxt = np.roll(poly, -1, axis=0)
-    dn = np.roll(d, -1)
+    nxt = cyclic_next(poly)
+    dn = cyclic_next(d)
     keep = d >= 0
     cross = keep != (dn >= 0)
     t = np.where(cross, d / np.where(cross, d - dn, 1.0), 0.0)
@@ -221,7 +221,7 @@ def _sign_before(sign: np.ndarray, i: int) -> float:
 def _angle_of(poly: np.ndarray) -> float:
     """Angle [rad] about O1 of a polygon's area centroid, in [0, 2π)."""
     x, y = poly[:, 0], poly[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    xn, yn = cyclic_next(x), cyclic_next(y)
     c = x * yn - xn * y
     sign = math.copysign(1.0, float(np.sum(c)))          # either orientation
     return math.atan2(sign * float(np.sum((y + yn) * c)), sign * float(np.sum((x + xn) * c))) % (2 * math.pi)
@@ -294,7 +294,7 @@ def arc_coverage(poly: np.ndarray, radius: float, a0: float, a1: float) -> list[
     each piece is inside or outside as a whole.
     """
     p = poly
-    q = np.roll(poly, -1, axis=0)
+    q = cyclic_next(poly)
     d = q - p
     a = np.einsum("ij,ij->i", d, d)
     b = 2 * np.einsum("ij,ij->i", p, d)
@@ -371,7 +371,7 @@ def _dead_centre_polygons(g):
 
 def _centroid(poly: np.ndarray) -> np.ndarray:
     x, y = poly[:, 0], poly[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    xn, yn = cyclic_next(x), cyclic_next(y)
     c = x * yn - xn * y
     a = 3.0 * float(np.sum(c))
     return np.array([float(np.sum((x + xn) * c)) / a, float(np.sum((y + yn) * c)) / a])
