@@ -172,10 +172,12 @@ def clip_half_plane(poly: np.ndarray, normal: np.ndarray) -> np.ndarray:
     if len(poly) == 0:
         return poly
     d = poly @ normal
-    nxt = cyclic_next(poly)
     dn = cyclic_next(d)
     keep = d >= 0
     cross = keep != (dn >= 0)
+    if not cross.any():                      # wholly on one side of the line (most calls)
+        return poly.copy() if keep[0] else np.zeros((0, 2))
+    nxt = cyclic_next(poly)
     t = np.where(cross, d / np.where(cross, d - dn, 1.0), 0.0)
     inter = poly + t[:, None] * (nxt - poly)
     pts = np.stack([poly, inter], axis=1).reshape(-1, 2)     # per edge: its start if kept, then the crossing
