@@ -58,9 +58,10 @@ def _overlapping_boxes(lo_p, hi_p, lo_q, hi_q):
     row-major order: ``np.nonzero`` of the dense M × K test, without forming it.
 
     The boxes of q no wider in x than nine in ten of them (an edge's box: most are short) are sorted by their low
-    x; such a box can overlap box i only if its low x lies within [lo_p[i] − 2 w, hi_p[i]] (w: that width), one
-    slice of the sorted boxes.  The wider tenth is tested against every box of p.  Every candidate then passes
-    the dense test's four comparisons, so the pairs are the same.
+    x; such a box can overlap box i only if its low x lies within [lo_p[i] − w, hi_p[i]] (w: that width), so the
+    candidates are the boxes whose low x lies in [lo_p[i] − 2 w, hi_p[i]] (room for round-off), one slice of the
+    sorted boxes.  The wider tenth is tested against every box of p.  Every candidate then passes the dense
+    test's four comparisons, so the pairs are the same.
     """
     width = hi_q[:, 0] - lo_q[:, 0]
     if len(width) == 0 or len(lo_p) == 0:
