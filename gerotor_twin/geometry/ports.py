@@ -182,7 +182,7 @@ def clip_half_plane(poly: np.ndarray, normal: np.ndarray) -> np.ndarray:
     inter = poly + t[:, None] * (nxt - poly)
     pts = np.stack([poly, inter], axis=1).reshape(-1, 2)     # per edge: its start if kept, then the crossing
     mask = np.stack([keep, cross], axis=1).reshape(-1)
-    return pts[mask] if mask.any() else np.zeros((0, 2))
+    return pts[mask]                         # not empty: a crossing keeps its point
 
 
 def _wedge_area(poly: np.ndarray, a0: float, a1: float) -> float:
