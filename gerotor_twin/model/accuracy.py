@@ -120,16 +120,15 @@ class Revolution:
         n = self.chamber_pressures.shape[1]
         rev0 = math.floor((self.theta[0] - 1e-9) / two_pi)
         phi_ref = self.theta - two_pi * rev0                       # (0, 2π]
-        p = np.empty((theta.size, n))
-        q = np.empty(theta.size)
-        for i, th in enumerate(theta):
-            rev = math.floor((th - 1e-9) / two_pi)
-            phi = th - two_pi * rev
-            cols = [(j - (rev - rev0)) % n for j in range(n)]
-            if phi > phi_ref[-1] + 1e-9:                            # wrap: below the first sample
-                phi -= two_pi
-            p[i] = [np.interp(phi, phi_ref, self.chamber_pressures[:, c], period=two_pi) for c in cols]
-            q[i] = np.interp(phi, phi_ref, self.delivery_flow, period=two_pi)
+        theta = np.asarray(theta, dtype=float)
+        rev = np.floor((theta - 1e-9) / two_pi)
+        phi = theta - two_pi * rev
+        phi = np.where(phi > phi_ref[-1] + 1e-9, phi - two_pi, phi)     # wrap: below the first sample
+        at_phi = np.column_stack([np.interp(phi, phi_ref, self.chamber_pressures[:, c], period=two_pi)
+                                  for c in range(n)])               # every reference chamber at each angle
+        cols = (np.arange(n)[None, :] - (rev - rev0).astype(np.int64)[:, None]) % n
+        p = np.take_along_axis(at_phi, cols, axis=1)
+        q = np.interp(phi, phi_ref, self.delivery_flow, period=two_pi)
         return p, q
 
     def save(self, path, **meta) -> None:
