@@ -128,3 +128,19 @@ def test_closing_edge_round_trips_and_defaults_to_ray(cfg):
     del raw["ports"]["suction"]["closing_edge"]
     assert parse_config(raw).suction_port.closing_edge == "ray"
     assert Port("suction", 3.5, 5.8).closing_edge == "ray"
+
+
+def test_dead_centre_outlines_are_shared_by_one_gear_set_at_any_clearance(cfg):
+    """Behaviour: the dead-centre chamber outlines every parse checks the port timing with are those of the ideal
+    gear set, so a config parsed again with another tooth-tip clearance (what a calibration does thousands of
+    times) reuses the same read-only arrays, and another gear set (five chambers) gets its own."""
+    from gerotor_twin.geometry.ports import _dead_centre_polygons
+    tighter = cfg.to_dict()
+    tighter["clearances"]["tooth_tip_m"] *= 0.5
+    g2 = parse_config(tighter, source="tighter").gears
+    assert g2.tip_clearance != cfg.gears.tip_clearance
+    a, b = _dead_centre_polygons(cfg.gears), _dead_centre_polygons(g2)
+    assert a[True] is b[True] and a[False] is b[False]
+    assert not a[True].flags.writeable
+    five = _dead_centre_polygons(_five_chambers(cfg, 4.0e-3).gears)
+    assert not np.array_equal(five[True], a[True])
