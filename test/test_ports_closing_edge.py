@@ -4,14 +4,17 @@ Closed form where stated; the rest is behaviour of the exact polygon clip on the
 """
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gerotor_twin.config import parse_config
+from gerotor_twin.config import load_config, parse_config
 from gerotor_twin.errors import InputError
-from gerotor_twin.geometry.chambers import chamber_polygon, ideal
+from gerotor_twin.geometry.chambers import chamber_dA_dtheta_closed_form, chamber_polygon, ideal, polygon_area
 from gerotor_twin.geometry.ports import Port, closing_cut, dead_centres, open_area
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -22,14 +25,28 @@ def setup(cfg):
     return g, ray, cut, closing_cut(g, cut), dead_centres(g)[0]
 
 
-def test_dead_centres_closed_form(cfg):
-    """Closed form: dA/dθ = 0 where the two lobes of chamber 0 sit symmetric about O1O2, i.e. at outer-gear
-    angle φ = −π/N (maximum) and π − π/N (minimum), θ = φ N/(N−1) modulo the period 2πN/(N−1)."""
-    g = ideal(cfg.gears)
-    N = g.chambers
+def _is_extremum(g, theta: float, maximum: bool) -> None:
+    """The chamber's rate vanishes at θ and turns sign the right way (closed-form rate), and the polygon area
+    of chamber 0 is the larger (maximum) or smaller (minimum) there than a quarter degree either side."""
+    h = math.radians(0.25)
+    scale = float(np.max(np.abs(chamber_dA_dtheta_closed_form(g, np.linspace(0, g.chamber_period, 97), 0))))
+    rate = [float(chamber_dA_dtheta_closed_form(g, t, 0)) for t in (theta - h, theta, theta + h)]
+    assert abs(rate[1]) < 1e-12 * scale, rate
+    assert (rate[0] > 0 > rate[2]) if maximum else (rate[0] < 0 < rate[2]), rate
+    area = [abs(polygon_area(chamber_polygon(g, t, 0))) for t in (theta - h, theta, theta + h)]
+    assert (area[1] > max(area[0], area[2])) if maximum else (area[1] < min(area[0], area[2])), area
+
+
+@pytest.mark.parametrize("pump", [None, *sorted(p.name for p in (ROOT / "config" / "pumps").glob("*.yaml"))])
+def test_dead_centres_are_the_extrema_of_the_chamber_volume(pump):
+    """Closed form (the rate of the pitch-point rule, and the polygon areas) on the default pump and every pump
+    of the family (N = 4 … 13): at the first angle of :func:`dead_centres` chamber 0 has its maximum volume, at the
+    second its minimum, each within one chamber period."""
+    g = ideal(load_config(None if pump is None else ROOT / "config" / "pumps" / pump).gears)
     tmax, tmin = dead_centres(g)
-    assert tmax == pytest.approx((-math.pi / N * N / (N - 1)) % g.chamber_period, abs=1e-12)
-    assert tmin == pytest.approx((math.pi - math.pi / N) * N / (N - 1), abs=1e-12)
+    assert 0 <= tmax < g.chamber_period and 0 <= tmin < g.chamber_period
+    _is_extremum(g, tmax, True)
+    _is_extremum(g, tmin, False)
 
 
 def _five_chambers(cfg, eccentricity_m):
@@ -42,16 +59,17 @@ def _five_chambers(cfg, eccentricity_m):
 
 @pytest.mark.parametrize("eccentricity_m", [3.5e-3, 4.0e-3])
 def test_dead_centres_closed_form_where_the_rate_vanishes_on_a_sample(cfg, eccentricity_m):
-    """Closed form (as above) for N = 5, whose dead centres (45° before the period's end, 180°) lie on samples of the
-    721-point search grid over the period of 450°; on these gear sets dA/dθ comes out exactly 0.0 there, and both
-    dead centres were once taken for the maximum, which made a valid gear set's geometric kidneys invalid (a
-    suction port spanning 325°, refused by the config's check).  The kidneys from the geometry span less than
-    180° each."""
+    """Closed form (as above) for N = 5, whose dead centres (45° before the period's end, 180°) lie on samples of a
+    721-point grid over the period of 450°, where dA/dθ comes out exactly 0.0: both dead centres were once taken
+    for the maximum, which made a valid gear set's geometric kidneys invalid (a suction port spanning 325°,
+    refused by the config's check).  The kidneys from the geometry span less than 180° each."""
     c = _five_chambers(cfg, eccentricity_m)
     g = ideal(c.gears)
     tmax, tmin = dead_centres(g)
-    assert tmax == pytest.approx((-math.pi / 5 * 5 / 4) % g.chamber_period, abs=1e-12)
-    assert tmin == pytest.approx((math.pi - math.pi / 5) * 5 / 4, abs=1e-12)
+    assert tmax == pytest.approx(g.chamber_period - math.radians(45), abs=1e-12)
+    assert tmin == pytest.approx(math.pi, abs=1e-12)
+    _is_extremum(g, tmax, True)
+    _is_extremum(g, tmin, False)
     for port in (c.suction_port, c.delivery_port):
         assert 0.0 < port.end - port.start < math.pi, port
 

@@ -81,7 +81,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .chambers import chamber_dA_dtheta_closed_form, chamber_polygon, ideal, polygon_area
+from .chambers import chamber_polygon, ideal, polygon_area
 from .overlap import cyclic_next, intersection_area, points_inside
 
 __all__ = ["Port", "Notch", "CLOSING_EDGES", "NOTCH_SHAPES", "clip_half_plane", "open_area", "closing_cut",
@@ -192,33 +192,23 @@ def _wedge_area(poly: np.ndarray, a0: float, a1: float) -> float:
 
 
 def dead_centres(g) -> tuple[float, float]:
-    """Shaft angles [rad] in [0, 2πN/(N−1)) where chamber 0 has its maximum and its minimum volume:
-    the zeros of the closed-form dA/dθ (:func:`.chambers.chamber_dA_dtheta_closed_form`)."""
-    from scipy.optimize import brentq
+    r"""Shaft angles [rad] in [0, 2πN/(N−1)) where chamber 0 has its maximum and its minimum volume.
+
+    The zeros of the closed-form rate (:func:`.chambers.chamber_dA_dtheta_closed_form`),
+    dA₀/dθ ∝ |PX₁|² − |PX₀|² with |PX_k| a function of cos ψ_k, ψ_k = φ + 2πk/N: the rate vanishes where
+    cos ψ₀ = cos ψ₁, the two lobes of chamber 0 symmetric about the line of centres O1O2,
+
+    .. math::
+        \varphi_\max = -\frac{\pi}{N},\qquad \varphi_\min = \pi - \frac{\pi}{N},\qquad
+        \theta = \varphi\,\frac{N}{N-1} \bmod \frac{2\pi N}{N-1}.
+
+    At φ_max the lobes sit either side of ψ = 0, where |PX| is largest; as φ grows |PX₁| falls and |PX₀|
+    rises, so the rate turns from + to −: the maximum.  Exact for every gear set (no clearance enters).
+    """
+    n = g.chambers
+    to_shaft = n / (n - 1)                   # θ = φ N/(N−1)
     period = g.chamber_period
-    th = np.linspace(0.0, period, 721)
-    sign = np.sign(chamber_dA_dtheta_closed_form(g, th, 0))
-    found = {}
-    for i in range(len(th) - 1):
-        if sign[i + 1] == 0 or sign[i] == sign[i + 1]:
-            continue                         # no sign change, or the root is the sample th[i + 1]: the next i
-        if sign[i] != 0:
-            root = brentq(lambda t: float(chamber_dA_dtheta_closed_form(g, t, 0)), th[i], th[i + 1], xtol=1e-14)
-        elif _sign_before(sign, i) != sign[i + 1]:
-            root = th[i]                     # the rate is exactly zero on a sample (N = 3, 5, 9: both dead centres are)
-        else:
-            continue                         # it touches zero there without changing sign
-        found["max" if sign[i + 1] < 0 else "min"] = root % period
-    return found["max"], found["min"]
-
-
-def _sign_before(sign: np.ndarray, i: int) -> float:
-    """The last non-zero sign before sample i of a periodic sampling whose last sample repeats the first."""
-    for k in range(1, len(sign)):
-        j = (i - k) % (len(sign) - 1)
-        if sign[j] != 0:
-            return sign[j]
-    return 0.0
+    return (-math.pi / n * to_shaft) % period, ((math.pi - math.pi / n) * to_shaft) % period
 
 
 def _angle_of(poly: np.ndarray) -> float:
