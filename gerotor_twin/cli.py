@@ -463,7 +463,8 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="run one operating point to periodic steady state")
     s.add_argument("--rpm", type=float, required=True, help="shaft speed [rpm]")
     s.add_argument("--bar", type=float, required=True, help="delivery pressure [bar gauge]")
-    s.add_argument("--revolutions", type=int, default=30, help="max revolutions to reach periodic state")
+    s.add_argument("--revolutions", type=int, default=30,
+                   help="at most this many revolutions to periodic state, the recorded one included")
     s.add_argument("--model", default="mobility", choices=MODEL_NAMES,
                    help="outer-gear model (default: mobility, the twin's)")
     s.add_argument("--config", help="pump YAML (default config/pump.yaml)")

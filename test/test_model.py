@@ -161,3 +161,33 @@ def test_outputs_at_requested_times(fixed_model):
     assert got["delivery_flow"][1] == pytest.approx(0.5 * (o.delivery_flow[10] + o.delivery_flow[11]))
     with pytest.raises(InputError):
         o.at([1.0])
+
+
+@pytest.mark.parametrize("rtol,min_revs,max_revs", [(2e-4, 3, 30), (1e-30, 2, 4), (2e-4, 1, 1)])
+def test_run_steady_records_the_revolution_that_settled(cfg, rtol, min_revs, max_revs):
+    """Behaviour: the recorded revolution is the first, from the ``min_revolutions``-th on, whose mean efficiency
+    changed by less than ``rtol`` from the one before, or the ``max_revolutions``-th; nothing is simulated after
+    it.  Checked against the same model advanced one revolution at a time by hand from the same start: the
+    recorded outputs and end state are that revolution's bit for bit, ``revolutions`` counts every one simulated
+    and ``periodicity_error`` is its change from the one before (NaN after a single revolution).  The gear's own
+    settling test is switched off (``etol`` = ∞) so that the flow's alone decides, as in the loop here."""
+    rpm, bar = 2000.0, 15.0
+    res = run_steady(PumpModel(cfg, "mobility"), rpm, bar, rtol=rtol, min_revolutions=min_revs,
+                     max_revolutions=max_revs, etol=math.inf)
+    m = PumpModel(cfg, "mobility")
+    inp = Inputs(rpm * math.pi / 30, cfg.boundary.suction_pressure_pa, cfg.fluid.atmospheric_pa + bar * 1e5)
+    state, etas = m.initial_state(inp), []
+    for n in range(1, max_revs + 1):
+        state, out = m.advance(state, 2 * math.pi / inp.omega, inp)
+        etas.append(out.volumetric_efficiency)
+        if n >= min_revs and n >= 2 and abs(etas[-1] - etas[-2]) / abs(etas[-1]) < rtol:
+            break
+    assert res.revolutions == n
+    assert np.array_equal(res.outputs.chamber_pressures, out.chamber_pressures)
+    assert np.array_equal(res.state.log_density, state.log_density)
+    if n == 1:
+        assert math.isnan(res.periodicity_error)
+    else:
+        assert res.periodicity_error == abs(etas[-1] - etas[-2]) / abs(etas[-1])
+        if n < max_revs:
+            assert res.periodicity_error < rtol

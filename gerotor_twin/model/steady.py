@@ -60,13 +60,13 @@ class SteadyResult:
     rpm: float
     bar: float
     model: str
-    revolutions: int            #: revolutions simulated before the recorded one
+    revolutions: int            #: revolutions simulated, the recorded (last) one included
     outputs: Outputs            #: the recorded revolution
     state: PumpState            #: state at its end
     theoretical_flow_m3s: float
     mean_delivery_flow_m3s: float
     volumetric_efficiency: float
-    periodicity_error: float    #: relative change of the mean flow over the last revolution [-]
+    periodicity_error: float    #: relative change of the mean flow from the revolution before the recorded one [-]
     p_atm: float = P_ATM        #: atmospheric pressure of the pump config (gauge zero) [Pa]
 
     @property
@@ -123,7 +123,12 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
                rtol: float = 2e-4, p_suction: float | None = None, progress=None,
                state: PumpState | None = None, etol: float = 2e-3,
                oil_temperature: float | None = None) -> SteadyResult:
-    """Run revolutions until the revolution-mean delivery flow settles, then record one.
+    """Run revolutions until the revolution-mean delivery flow settles; the settled revolution is the one recorded.
+
+    The recorded revolution is the first, from the ``min_revolutions``-th on, whose mean changed by less than
+    ``rtol`` from the revolution before (and its mean eccentricity by less than ``etol``), or the
+    ``max_revolutions``-th: the usual test of a cyclic steady state, which takes the last cycle once two
+    in a row agree.  Its error against the periodic state is of the order of that change.
 
     Parameters
     ----------
@@ -133,6 +138,8 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
         Shaft speed [rpm] (> 0).
     bar : float
         Delivery gauge pressure [bar] (imposed mode; ignored in restriction mode).
+    max_revolutions, min_revolutions : int
+        At most and at least this many revolutions in all, the recorded one included.
     rtol : float
         Settling criterion on the relative change of the revolution mean [-].
     state : PumpState, optional
@@ -164,22 +171,19 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     c = model.config.clearances.housing_radial_m
     last = last_e = None
     n = 0
-    change = float("inf")
-    while n < max_revolutions:
+    while True:
         state, out = model.advance(state, period, inputs)
         n += 1
         mean = out.volumetric_efficiency
         mean_e = out.eccentricity.mean(axis=0)
-        if last is not None:
-            change = max(abs(mean - last) / max(abs(mean), 1e-12),
-                         rtol * float(np.hypot(*(mean_e - last_e))) / (etol * c))
+        change = float("inf") if last is None else max(
+            abs(mean - last) / max(abs(mean), 1e-12), rtol * float(np.hypot(*(mean_e - last_e))) / (etol * c))
         if progress is not None:
             progress(n, change)
-        if n >= min_revolutions and change < rtol:
+        if (n >= min_revolutions and change < rtol) or n >= max_revolutions:
             break
         last, last_e = mean, mean_e
-    state, out = model.advance(state, period, inputs)
-    eta = out.volumetric_efficiency
+    eta = out.volumetric_efficiency         # the recorded revolution: the last, settled one
     final_change = abs(eta - last) / max(abs(eta), 1e-12) if last is not None else float("nan")
     qth = out.theoretical_flow
     edge = EdgeLosses.of(model.config, model.displacement)
