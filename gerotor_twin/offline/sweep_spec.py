@@ -5,7 +5,7 @@ Example (``config/sweep_demo.yaml`` is a complete one)::
     title: eccentricity x speed            # optional
     base_config: pump.yaml                 # relative to the SPEC file; default: the default pump
     model: mobility                        # outer-gear model (unless bearing_model is varied)
-    revolutions: 30                        # at most this many to periodic steady state, the recorded one included [1, 1000]
+    revolutions: 30                        # at most this many to periodic state, the recorded one included [1, 1000]
     min_revolutions: 3                     # at least this many, the recorded (settled) one included [1, revolutions]
     set: {numerics.table_points: 1024}     # config fields held at one value for the whole study
     operating: {speed_rpm: 1500, delivery_bar: 10}   # the operating point when not varied
