@@ -66,7 +66,8 @@ def _overlapping_boxes(lo_p, hi_p, lo_q, hi_q):
     width = hi_q[:, 0] - lo_q[:, 0]
     if len(width) == 0 or len(lo_p) == 0:
         return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-    w = float(np.quantile(width, 0.9))
+    k9 = (9 * (len(width) - 1)) // 10
+    w = float(np.partition(width, k9)[k9])       # about the 90th percentile: any w gives the same pairs
     narrow = np.nonzero(width <= w)[0]
     narrow = narrow[np.argsort(lo_q[narrow, 0], kind="stable")]
     first = np.searchsorted(lo_q[narrow, 0], lo_p[:, 0] - 2.0 * w, side="left")
