@@ -111,8 +111,8 @@ def cmd_simulate(args) -> int:
     print(file=sys.stderr)
     s = res.summary()
     s["wall_time_s"] = time.perf_counter() - t0
-    print(f"{args.model} model, {args.rpm:g} rpm, {args.bar:g} bar gauge "
-          f"({s['revolutions']} revolutions to periodic state, {s['wall_time_s']:.2f} s)")
+    print(f"{args.model} model, {args.rpm:g} rpm, {args.bar:g} bar gauge ({s['revolutions']} revolutions "
+          f"{'to periodic state' if res.settled else 'and not settled'}, {s['wall_time_s']:.2f} s)")
     print(f"  oil                     {kelvin_to_celsius(model.temperature_k):9.1f} °C, "
           f"μ {1e3 * model.kernel.pc.viscosity:.2f} mPa·s, fluid model {cfg.fluid_model}")
     print(f"  theoretical flow        {m3s_to_lpm(s['theoretical_flow_m3s']):9.3f} L/min")
@@ -127,6 +127,12 @@ def cmd_simulate(args) -> int:
     print(f"  min tooth-tip gap       {s['min_tooth_gap_m'] * 1e6:9.3f} µm "
           f"(lobes not in contact: {s['min_open_tooth_gap_m'] * 1e6:.3f} µm; effective ⟨h³⟩^(1/3) "
           f"{s['effective_tooth_gap_m'] * 1e6:.2f} µm)")
+    if not res.settled:
+        last = "one revolution, none to compare it with" if math.isnan(res.periodicity_error) else \
+            f"the last changed the mean flow by {res.periodicity_error:.1e}"
+        print(f"  warning: not settled in {res.revolutions} revolutions ({last}; the test: 2e-4 on the mean flow, "
+              f"0.2 % of the housing clearance on the gear's mean position): not the periodic state; raise "
+              f"--revolutions", file=sys.stderr)
     c = s["counts"]
     if c.get("housing_contact"):
         print(f"  warning: the outer gear reached the housing-film limit (ε = 0.95) in {c['housing_contact']} "

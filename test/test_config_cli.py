@@ -85,6 +85,24 @@ def test_cli_simulate_json(tmp_path):
     assert 0 < d["volumetric_efficiency"] < 1
 
 
+def test_cli_simulate_says_when_it_did_not_settle(tmp_path, capsys):
+    """Nothing silent: a run stopped by ``--revolutions`` before the settling test passed says so, on its summary
+    line and in one warning naming the last change and what to raise, and its JSON says ``settled: false``; a
+    settled run says neither."""
+    from gerotor_twin.cli import main
+    for revs, settled in (("2", False), ("30", True)):
+        js = tmp_path / f"s{revs}.json"
+        assert main(["simulate", "--rpm", "2000", "--bar", "10", "--revolutions", revs, "--json", str(js)]) == 0
+        out, err = capsys.readouterr()
+        warned = [ln for ln in err.splitlines() if "not settled" in ln]
+        assert json.loads(js.read_text())["settled"] is settled
+        if settled:
+            assert not warned and "revolutions to periodic state" in out
+        else:
+            assert len(warned) == 1 and "changed the mean flow by" in warned[0] and "raise --revolutions" in warned[0]
+            assert "2 revolutions and not settled" in out
+
+
 @pytest.mark.parametrize("args,needle", [
     (("simulate", "--rpm", "5000", "--bar", "10"), "--rpm = 5000.0 is invalid; allowed: (0, 3300] rpm (the rated 3000 rpm + 10 %)"),
     (("simulate", "--rpm", "1000", "--bar", "40"), "--bar = 40.0 is invalid"),

@@ -169,7 +169,8 @@ def test_run_steady_records_the_revolution_that_settled(cfg, rtol, min_revs, max
     changed by less than ``rtol`` from the one before, or the ``max_revolutions``-th; nothing is simulated after
     it.  Checked against the same model advanced one revolution at a time by hand from the same start: the
     recorded outputs and end state are that revolution's bit for bit, ``revolutions`` counts every one simulated
-    and ``periodicity_error`` is its change from the one before (NaN after a single revolution).  The gear's own
+    and ``periodicity_error`` is its change from the one before (NaN after a single revolution); ``settled`` says
+    whether the test passed (not where ``max_revolutions`` came first).  The gear's own
     settling test is switched off (``etol`` = ∞) so that the flow's alone decides, as in the loop here."""
     rpm, bar = 2000.0, 15.0
     res = run_steady(PumpModel(cfg, "mobility"), rpm, bar, rtol=rtol, min_revolutions=min_revs,
@@ -183,6 +184,7 @@ def test_run_steady_records_the_revolution_that_settled(cfg, rtol, min_revs, max
         if n >= min_revs and n >= 2 and abs(etas[-1] - etas[-2]) / abs(etas[-1]) < rtol:
             break
     assert res.revolutions == n
+    assert res.settled == (n >= min_revs and n >= 2 and abs(etas[-1] - etas[-2]) / abs(etas[-1]) < rtol)
     assert np.array_equal(res.outputs.chamber_pressures, out.chamber_pressures)
     assert np.array_equal(res.state.log_density, state.log_density)
     if n == 1:

@@ -68,6 +68,7 @@ class SteadyResult:
     volumetric_efficiency: float
     periodicity_error: float    #: relative change of the mean flow from the revolution before the recorded one [-]
     p_atm: float = P_ATM        #: atmospheric pressure of the pump config (gauge zero) [Pa]
+    settled: bool = True        #: the settling test passed (False: ``max_revolutions`` came first)
 
     @property
     def flow_ripple(self) -> float:
@@ -94,6 +95,7 @@ class SteadyResult:
             "mean_delivery_pressure_pa": float(o.delivery_pressure.mean()),
             "revolutions": self.revolutions,
             "periodicity_error": self.periodicity_error,
+            "settled": self.settled,
             "counts": self.state.counts,
         }
 
@@ -180,7 +182,8 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
             abs(mean - last) / max(abs(mean), 1e-12), rtol * float(np.hypot(*(mean_e - last_e))) / (etol * c))
         if progress is not None:
             progress(n, change)
-        if (n >= min_revolutions and change < rtol) or n >= max_revolutions:
+        settled = n >= min_revolutions and change < rtol
+        if settled or n >= max_revolutions:
             break
         last, last_e = mean, mean_e
     eta = out.volumetric_efficiency         # the recorded revolution: the last, settled one
@@ -190,4 +193,4 @@ def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 
     q = eta * qth - edge.flow(inputs.omega, float(np.mean(out.delivery_pressure)), inputs.p_suction)
     return SteadyResult(rpm=rpm, bar=bar, model=model.bearing_name, revolutions=n, outputs=out, state=state,
                         theoretical_flow_m3s=qth, mean_delivery_flow_m3s=q, volumetric_efficiency=q / qth,
-                        periodicity_error=final_change, p_atm=p_atm)
+                        periodicity_error=final_change, p_atm=p_atm, settled=settled)
