@@ -282,6 +282,23 @@ def test_evaluator_shares_runs_across_sets_and_edge_losses(bags):
         assert ev.flows((), [np.zeros(0)], recs)[0] == pytest.approx(q1, rel=1e-15) and ev.simulated == runs
 
 
+def test_unsettled_plateau_simulations_are_counted_and_told(bags, tmp_path, capsys, monkeypatch):
+    """Nothing silent: plateau simulations that stop at their revolution limit before the settling test passes
+    (forced here: at most two revolutions, fewer than the test's three) are counted in the result and told in
+    one note with the largest last change."""
+    from gerotor_twin.model import steady
+    real = steady.run_steady
+    monkeypatch.setattr(steady, "run_steady", lambda *a, **kw: real(*a, **{**kw, "max_revolutions": 2}))
+    js = tmp_path / "r.json"
+    assert main(["calibrate", "--bench", str(bags[FACTORS[0]][0]), "-o", str(tmp_path / "p.yaml"), "--params",
+                 "lateral", "--cv", "none", "--json", str(js), "--settle-s", "1.0", "--min-plateau-s", "1.0",
+                 "--jobs", "1", "--quiet"]) == 0
+    notes = [ln for ln in capsys.readouterr().out.splitlines() if "before settling" in ln]
+    r = json.loads(js.read_text())
+    assert r["unsettled_simulations"] == r["simulations"] > 0 and r["unsettled_worst_change"] > 1e-6
+    assert len(notes) == 1 and notes[0].startswith(f"note: {r['simulations']} of {r['simulations']} plateau")
+
+
 def test_cli_end_to_end(bags, tmp_path, capsys):
     """Behaviour: the command writes config, JSON and HTML and prints the verdict on identifiability and, by
     default cross-validated across speeds, whether the fit beats the nominal twin on held-out plateaus."""
@@ -292,6 +309,7 @@ def test_cli_end_to_end(bags, tmp_path, capsys):
                  "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "held-out RMSE" in text and "wrote" in text
+    assert "before settling" not in text                    # every plateau simulation settled
     assert [ln for ln in text.splitlines() if ln.startswith("calibration ")][0].startswith(
         "calibration accepted: lateral predicts the held-out plateaus better than the nominal twin")
     r = json.loads(js.read_text())

@@ -199,7 +199,9 @@ def _run(records, raw, plan: FitPlan, jobs, displacement, opts, say) -> dict:
             sel, fr = _select(ev, records, raw, plan, displacement, opts, say)
             v = sel.pop("verdict")
         return {"holdout": ho, "selection": sel, "verdict": v, "params": list(fr.names),
-                "fit": _fit_summary(fr, raw, records, displacement), "simulations": ev.simulated, "jobs": ev.jobs}
+                "fit": _fit_summary(fr, raw, records, displacement), "simulations": ev.simulated, "jobs": ev.jobs,
+                "unsettled_simulations": len(ev.unsettled),
+                "unsettled_worst_change": max(ev.unsettled, default=None)}
 
 
 def _pt(v: float) -> str:
@@ -495,6 +497,10 @@ def cmd_calibrate(args) -> int:
     print(f"wrote {out} ({res['simulations']} plateau simulations on {res['jobs']} processes, "
           f"{res['wall_time_s']:.1f} s)")
     print_summary(res)
+    if res.get("unsettled_simulations"):
+        print(f"note: {res['unsettled_simulations']} of {res['simulations']} plateau simulations stopped at their "
+              f"revolution limit before settling (largest last change of the mean flow "
+              f"{res['unsettled_worst_change']:.1e}, the test 1e-6); their flows carry an error of about that size")
     for row in res.get("excluded_plateaus", []):
         print(f"note: {row['plateau']} not used: outside the pump's input envelope ({row['reason']}); the pump "
               "config's `range` sets it")

@@ -57,6 +57,8 @@ class Evaluator:
         self.jobs = max(1, int(jobs or os.cpu_count() or 1))
         self.progress = progress
         self.simulated = 0
+        #: the last revolution's change of the runs that stopped at their revolution limit unsettled [-]
+        self.unsettled: list[float] = []
         self._pool = None
         self._runs: dict[str, dict] = {}
 
@@ -114,6 +116,7 @@ class Evaluator:
             out = first + list(self._pool.map(plateau_flow, rest, chunksize=max(1, len(rest) // (4 * self.jobs))))
         self._runs.update(zip(todo, out))
         self.simulated += len(tasks)
+        self.unsettled += [o["periodicity_error"] for o in out if not o["settled"]]
         if self.progress:
             self.progress(f"  {self.simulated} plateau simulations")
 

@@ -179,7 +179,7 @@ def plateau_flow(task: PlateauTask) -> dict:
     -------
     dict
         ``flow_m3s`` (revolution-mean delivery [m³/s]), ``theoretical_m3s``, ``revolutions``,
-        ``periodicity_error``; and what :func:`with_edge_losses` needs to put another ``volumetric`` section on
+        ``periodicity_error``, ``settled`` (:class:`~gerotor_twin.model.steady.SteadyResult`); and what :func:`with_edge_losses` needs to put another ``volumetric`` section on
         the same run: ``edge_free_m3s`` (the chamber model's delivery before the edge losses [m³/s]),
         ``displacement_m3`` [m³/rev], ``density_kg_m3``, ``p_delivery_pa``, ``p_suction_pa`` (as run) [Pa abs];
         ``expansion_to_atm``, ρ(p_d)/ρ(p_atm) of the oil at the plateau's temperature [-] (:func:`at_meter`).
@@ -204,7 +204,7 @@ def plateau_flow(task: PlateauTask) -> dict:
     p_d = float(np.mean(res.outputs.delivery_pressure))
     eos = model.kernel.eos                                  # at the plateau's temperature (run_steady set it)
     return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,
-            "revolutions": res.revolutions, "periodicity_error": res.periodicity_error,
+            "revolutions": res.revolutions, "periodicity_error": res.periodicity_error, "settled": res.settled,
             "edge_free_m3s": float(res.outputs.volumetric_efficiency * res.theoretical_flow_m3s),
             "displacement_m3": model.displacement, "density_kg_m3": cfg.fluid.density_kg_m3,
             "p_delivery_pa": p_d,
