@@ -99,7 +99,7 @@ def _port_timing_info(cfg) -> dict:
 def cmd_simulate(args) -> int:
     from .config import load_config
     from .model.pump import PumpModel
-    from .model.steady import run_steady
+    from .model.steady import SETTLE_ETOL, SETTLE_RTOL, run_steady
 
     cfg = load_config(args.config)
     if args.fluid_model:
@@ -130,9 +130,9 @@ def cmd_simulate(args) -> int:
     if not res.settled:
         last = "one revolution, none to compare it with" if math.isnan(res.periodicity_error) else \
             f"the last changed the mean flow by {res.periodicity_error:.1e}"
-        print(f"  warning: not settled in {res.revolutions} revolutions ({last}; the test: 2e-4 on the mean flow, "
-              f"0.2 % of the housing clearance on the gear's mean position): not the periodic state; raise "
-              f"--revolutions", file=sys.stderr)
+        print(f"  warning: not settled in {res.revolutions} revolutions ({last}; the test: {SETTLE_RTOL:g} on the "
+              f"mean flow, {100 * SETTLE_ETOL:g} % of the housing clearance on the gear's mean position): not the "
+              f"periodic state; raise --revolutions", file=sys.stderr)
     c = s["counts"]
     if c.get("housing_contact"):
         print(f"  warning: the outer gear reached the housing-film limit (ε = 0.95) in {c['housing_contact']} "

@@ -24,7 +24,7 @@ from ..errors import InputError, check_range
 from ..units import m3s_to_lpm, rad_s_to_rpm
 from . import fit as C
 from ..hydraulics.meter import FLOW_METERS
-from .fit_model import DISPLAY_UNITS, PARAMETERS, apply, parse_params
+from .fit_model import DISPLAY_UNITS, PARAMETERS, PLATEAU_RTOL, apply, parse_params
 from .plateaus import DetectorSettings, bench_plateaus, split_by_envelope
 from . import prediction as P
 from . import selection as S
@@ -500,7 +500,8 @@ def cmd_calibrate(args) -> int:
     if res.get("unsettled_simulations"):
         print(f"note: {res['unsettled_simulations']} of {res['simulations']} plateau simulations stopped at their "
               f"revolution limit before settling (largest last change of the mean flow "
-              f"{res['unsettled_worst_change']:.1e}, the test 1e-6); their flows carry an error of about that size")
+              f"{res['unsettled_worst_change']:.1e}, the test {PLATEAU_RTOL:g}); their flows carry an error of about "
+              "that size")
     for row in res.get("excluded_plateaus", []):
         print(f"note: {row['plateau']} not used: outside the pump's input envelope ({row['reason']}); the pump "
               "config's `range` sets it")

@@ -155,6 +155,11 @@ class PlateauTask:
     oil_temperature_c: float     #: plateau mean oil temperature [°C] (NaN: none recorded)
 
 
+#: A plateau run's settling test (:func:`plateau_flow`): the revolution mean's relative change [-], and the
+#: revolutions at most
+PLATEAU_RTOL = 1e-6
+PLATEAU_MAX_REVOLUTIONS = 60
+
 _TABLES: dict[str, object] = {}
 
 
@@ -179,8 +184,9 @@ def plateau_flow(task: PlateauTask) -> dict:
     -------
     dict
         ``flow_m3s`` (revolution-mean delivery [m³/s]), ``theoretical_m3s``, ``revolutions``,
-        ``periodicity_error``, ``settled`` (:class:`~gerotor_twin.model.steady.SteadyResult`); and what :func:`with_edge_losses` needs to put another ``volumetric`` section on
-        the same run: ``edge_free_m3s`` (the chamber model's delivery before the edge losses [m³/s]),
+        ``periodicity_error``, ``settled`` (:class:`~gerotor_twin.model.steady.SteadyResult`); and what
+        :func:`with_edge_losses` needs to put another ``volumetric`` section on the same run: ``edge_free_m3s``
+        (the chamber model's delivery before the edge losses [m³/s]),
         ``displacement_m3`` [m³/rev], ``density_kg_m3``, ``p_delivery_pa``, ``p_suction_pa`` (as run) [Pa abs];
         ``expansion_to_atm``, ρ(p_d)/ρ(p_atm) of the oil at the plateau's temperature [-] (:func:`at_meter`).
 
@@ -200,7 +206,7 @@ def plateau_flow(task: PlateauTask) -> dict:
     t_c = task.oil_temperature_c
     t_oil = celsius_to_kelvin(t_c) if t_c is not None and math.isfinite(t_c) else None
     res = run_steady(model, rad_s_to_rpm(task.omega), pa_abs_to_bar_gauge(task.p_delivery_pa, p_atm),
-                     max_revolutions=60, rtol=1e-6, p_suction=ps, oil_temperature=t_oil)
+                     max_revolutions=PLATEAU_MAX_REVOLUTIONS, rtol=PLATEAU_RTOL, p_suction=ps, oil_temperature=t_oil)
     p_d = float(np.mean(res.outputs.delivery_pressure))
     eos = model.kernel.eos                                  # at the plateau's temperature (run_steady set it)
     return {"flow_m3s": res.mean_delivery_flow_m3s, "theoretical_m3s": res.theoretical_flow_m3s,

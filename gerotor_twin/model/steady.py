@@ -13,6 +13,11 @@ from .pump import Inputs, Outputs, PumpModel, PumpState
 from .records import widened, widened_text
 from .volumetric import EdgeLosses
 
+#: The settling test's defaults (:func:`run_steady`): the revolution mean's relative change [-], and the mean
+#: eccentricity's change as a fraction of the housing clearance [-]
+SETTLE_RTOL = 2e-4
+SETTLE_ETOL = 2e-3
+
 #: The defaults of the settings the log-density measure does not read (:func:`reference_config`).
 _PRESSURE_MEASURE_ONLY = Numerics()
 
@@ -122,8 +127,8 @@ def _allowed_point(rng) -> dict:
 
 
 def run_steady(model: PumpModel, rpm: float, bar: float, max_revolutions: int = 30, min_revolutions: int = 3,
-               rtol: float = 2e-4, p_suction: float | None = None, progress=None,
-               state: PumpState | None = None, etol: float = 2e-3,
+               rtol: float = SETTLE_RTOL, p_suction: float | None = None, progress=None,
+               state: PumpState | None = None, etol: float = SETTLE_ETOL,
                oil_temperature: float | None = None) -> SteadyResult:
     """Run revolutions until the revolution-mean delivery flow settles; the settled revolution is the one recorded.
 
